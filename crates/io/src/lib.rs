@@ -1,0 +1,2 @@
+//! Files and devices around `plumbline-core`: CARMEN logs, relations, trajectories.
+#![forbid(unsafe_code)]

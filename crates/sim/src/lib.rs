@@ -1,0 +1,3 @@
+//! Plumbline's quadrotor simulator (f64): worlds, rigid-body dynamics, motors, battery,
+//! emulated sensors, disturbances and the lockstep runner that drives the onboard code.
+#![forbid(unsafe_code)]
