@@ -1,2 +1,4 @@
 //! Files and devices around `plumbline-core`: CARMEN logs, relations, trajectories.
 #![forbid(unsafe_code)]
+
+pub mod carmen;
