@@ -8,5 +8,6 @@
 #![forbid(unsafe_code)]
 
 pub mod geom;
+pub mod msgs;
 pub mod scan;
 pub mod matching;

@@ -1,0 +1,250 @@
+//! Messages between the vehicle (simulated, replayed or real) and the onboard code.
+//!
+//! Plain `Copy` structs with the unit in every field name, so a driver written against these types
+//! cannot mix up metres and centimetres or degrees and radians. Frames follow DESIGN.md §3: world
+//! is ENU-like (z up), body is FLU (x forward, y left, z up). Times are seconds as `f64` (the
+//! simulator's clock); onboard steps themselves take `dt: f32`.
+
+/// One inertial sample in the body FLU frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ImuSample {
+    pub t_s: f64,
+    /// Angular rate about body x, y, z (right-handed, counter-clockwise positive).
+    pub gyro_rad_s: [f32; 3],
+    /// Specific force (what an accelerometer reads): +9.81 on z when resting level.
+    pub accel_m_s2: [f32; 3],
+}
+
+/// One sonar range along body -z (down), from the sensor to the floor.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SonarSample {
+    pub t_s: f64,
+    pub range_m: f32,
+}
+
+/// One battery measurement.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BatterySample {
+    pub t_s: f64,
+    /// Pack voltage under load.
+    pub voltage_v: f32,
+}
+
+/// What the scan matcher reports for one lidar revolution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScanMatchStatus {
+    /// No match was attempted (first scan, or the matcher started a new reference scan without
+    /// matching); the scan becomes the reference for later matches.
+    ReferenceOnly,
+    /// The pose change fields hold a match of this scan against the current reference.
+    Matched,
+    /// The matcher ran and failed (too few points, no convergence); the pose change is meaningless.
+    Failed,
+}
+
+/// The scan matcher's result for one revolution, as the estimator consumes it.
+///
+/// The pose change is the pose of this scan expressed in the frame of the *reference* scan (the
+/// previous scan for scan-to-scan matching, or a keyframe), i.e. `inverse(x_ref) * x_now`.
+/// The estimator keeps a copy of its pose at the reference time, so both kinds of matching work.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanMatchDelta {
+    /// Time the scan was taken.
+    pub t_s: f64,
+    pub status: ScanMatchStatus,
+    /// Translation in the reference scan's frame.
+    pub dx_m: f32,
+    pub dy_m: f32,
+    /// Rotation, normalised to (-pi, pi].
+    pub dtheta_rad: f32,
+    /// Covariance of (dx_m, dy_m, dtheta_rad); units m^2, m*rad, rad^2. Row-major, symmetric.
+    pub covariance: [[f32; 3]; 3],
+    /// Unit vector (reference frame) along which the match could not constrain translation, e.g.
+    /// the axis of a featureless corridor. `None` when all directions are observed.
+    pub degenerate_axis: Option<[f32; 2]>,
+    /// True when, after this result, this scan is the reference for the next matches
+    /// (always for scan-to-scan; only on keyframe changes for scan-to-keyframe).
+    pub becomes_reference: bool,
+}
+
+/// The pilot's radio: sticks normalised and switches.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PilotInput {
+    /// Roll stick, -1 (left) .. 1 (right).
+    pub roll_norm: f32,
+    /// Pitch stick, -1 (back) .. 1 (forward).
+    pub pitch_norm: f32,
+    /// Yaw stick, -1 (clockwise) .. 1 (counter-clockwise).
+    pub yaw_norm: f32,
+    /// Throttle stick, 0 .. 1.
+    pub throttle_norm: f32,
+    /// Arm switch: on arms and (outside manual) takes off; off lands and disarms once down.
+    pub arm: bool,
+    /// Manual takeover switch: stick flight with rate damping (seed 002 sec. II.B.2).
+    pub manual: bool,
+    /// Kill switch: motors stop at once, whatever else is going on (seed 002 sec. III).
+    pub kill: bool,
+}
+
+/// Normalised motor commands, one per motor, in the order of [`FrameKind::motors`].
+///
+/// 0 is stopped, 1 is full; the command is proportional to rotor speed, so thrust goes with its
+/// square (seed 002 eq. 20 takes a square root for this reason).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MotorCommands {
+    pub throttle_norm: [f32; 4],
+}
+
+impl MotorCommands {
+    pub const STOPPED: MotorCommands = MotorCommands {
+        throttle_norm: [0.0; 4],
+    };
+}
+
+/// The two quadrotor frame layouts of seed 002 eq. 20 and its plus-configuration twin.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FrameKind {
+    /// Square ("X") configuration: motors on the diagonals.
+    #[default]
+    X,
+    /// Plus configuration: motors on the body axes.
+    Plus,
+}
+
+/// Where one motor sits and which way it turns; arm length is a vehicle parameter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotorGeometry {
+    /// Unit vector from the centre of gravity to the rotor hub, body FLU x and y.
+    pub arm_dir: [f32; 2],
+    /// True when the rotor turns counter-clockwise seen from above; its reaction torque on the
+    /// body is then clockwise (negative about body z).
+    pub spins_ccw: bool,
+}
+
+impl FrameKind {
+    /// Motor order is seed 002's numbering: X = 1 front-right, 2 back-right, 3 back-left,
+    /// 4 front-left; plus = 1 front, 2 right, 3 back, 4 left. Odd motors turn clockwise (eq. 19:
+    /// yaw moment -M1 + M2 - M3 + M4). Index 0 here is the seed's motor 1.
+    pub fn motors(self) -> [MotorGeometry; 4] {
+        const D: f32 = core::f32::consts::FRAC_1_SQRT_2;
+        let dirs = match self {
+            FrameKind::X => [[D, -D], [-D, -D], [-D, D], [D, D]],
+            FrameKind::Plus => [[1.0, 0.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 1.0]],
+        };
+        let mut out = [MotorGeometry {
+            arm_dir: [0.0; 2],
+            spins_ccw: false,
+        }; 4];
+        for (i, m) in out.iter_mut().enumerate() {
+            m.arm_dir = dirs[i];
+            m.spins_ccw = i % 2 == 1;
+        }
+        out
+    }
+}
+
+/// Where the autopilot wants the vehicle: a hold point and heading in the world frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PositionSetpoint {
+    pub position_m: [f32; 3],
+    pub yaw_rad: f32,
+}
+
+/// The onboard estimate, in the world frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EstimatedState {
+    pub position_m: [f32; 3],
+    pub velocity_m_s: [f32; 3],
+    pub roll_rad: f32,
+    pub pitch_rad: f32,
+    pub yaw_rad: f32,
+    /// One-sigma position uncertainty per world axis, from the filter's covariance.
+    pub position_std_m: [f32; 3],
+    /// False when the filter has diverged or has not been fed enough to fly on.
+    pub valid: bool,
+}
+
+/// The autopilot's modes (DESIGN.md §1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FlightMode {
+    /// Motors stopped, waiting for the arm switch.
+    #[default]
+    Disarmed,
+    /// Climbing to the hold height above the takeoff point.
+    Takeoff,
+    /// Holding position and heading.
+    Hold,
+    /// Descending; disarms on touchdown.
+    Land,
+    /// Pilot sticks with rate damping.
+    Manual,
+    /// Kill switch: motors stopped until the switch is released and the vehicle re-armed.
+    Killed,
+}
+
+/// Why the autopilot overrode the pilot or the mission.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FailsafeReason {
+    /// No usable scan match: held on the IMU for a bounded time, then landed.
+    LidarLost,
+    /// The estimate is not trustworthy (diverged, non-finite, too uncertain): land.
+    EstimateInvalid,
+    /// Battery below the landing threshold: land.
+    BatteryLow,
+    /// Battery below the critical threshold: land now, faster.
+    BatteryCritical,
+    /// The kill switch stopped the motors.
+    KillSwitch,
+}
+
+/// Everything the vehicle hands the autopilot for one step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Inputs {
+    /// The current time; the IMU sample is taken at this step.
+    pub t_s: f64,
+    pub imu: ImuSample,
+    /// A new sonar reading, if one arrived since the last step.
+    pub sonar: Option<SonarSample>,
+    /// A new scan-matcher result, if a revolution completed since the last step.
+    pub scan_match: Option<ScanMatchDelta>,
+    /// A new battery reading, if one arrived since the last step.
+    pub battery: Option<BatterySample>,
+    pub pilot: PilotInput,
+}
+
+/// What the autopilot hands back after one step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Outputs {
+    pub motors: MotorCommands,
+    pub mode: FlightMode,
+    /// The most recent failsafe that is still in force.
+    pub failsafe: Option<FailsafeReason>,
+    pub estimate: EstimatedState,
+    /// The position setpoint being flown, when the mode has one.
+    pub setpoint: Option<PositionSetpoint>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_put_each_motor_on_a_unit_arm_with_alternating_spin() {
+        for frame in [FrameKind::X, FrameKind::Plus] {
+            let m = frame.motors();
+            let (mut sx, mut sy, mut spin) = (0.0, 0.0, 0);
+            for g in m {
+                let n = libm::hypotf(g.arm_dir[0], g.arm_dir[1]);
+                assert!((n - 1.0).abs() < 1e-6);
+                sx += g.arm_dir[0];
+                sy += g.arm_dir[1];
+                spin += if g.spins_ccw { 1 } else { -1 };
+            }
+            // Balanced: no net lever arm, no net reaction torque at equal speeds.
+            assert!(sx.abs() < 1e-6 && sy.abs() < 1e-6 && spin == 0);
+        }
+        // Seed 002 numbering: motor 1 front-right of an X frame, turning clockwise.
+        let m1 = FrameKind::X.motors()[0];
+        assert!(m1.arm_dir[0] > 0.0 && m1.arm_dir[1] < 0.0 && !m1.spins_ccw);
+    }
+}
