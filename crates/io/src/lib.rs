@@ -1,4 +1,10 @@
-//! Files and devices around `plumbline-core`: CARMEN logs, relations, trajectories.
+//! Files and devices around `plumbline-core`: CARMEN logs, relations, trajectories and the
+//! relations metric.
 #![forbid(unsafe_code)]
 
 pub mod carmen;
+pub mod eval;
+mod pose_math;
+pub mod relations;
+mod text_table;
+pub mod trajectory;

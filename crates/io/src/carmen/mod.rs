@@ -2,8 +2,15 @@
 //!
 //! Layouts are in `DESIGN.md` §5. Readers take `.gz` transparently.
 
+mod fov;
+mod read;
 mod record;
 mod write;
 
+pub use fov::FovRule;
+pub use read::{
+    parse_log, read_log, CarmenLog, OdomRecord, ReadError, ReadOptions, ReadStats,
+    FLASER_MAX_RANGE_M,
+};
 pub use record::{LaserRecord, OdomPose};
 pub use write::write_robotlaser1;

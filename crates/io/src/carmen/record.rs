@@ -37,7 +37,10 @@ impl LaserRecord {
         max_range_m: f32,
         ranges_m: Vec<f32>,
     ) -> Self {
-        let valid = ranges_m.iter().map(|&r| r.is_finite() && r > 0.0 && r < max_range_m).collect();
+        let valid = ranges_m
+            .iter()
+            .map(|&r| r.is_finite() && r > 0.0 && r < max_range_m)
+            .collect();
         Self {
             timestamp_s,
             timestamp_text: format!("{timestamp_s:.6}"),
@@ -59,7 +62,11 @@ impl LaserRecord {
         let mut scan = Scan::new(self.timestamp_s);
         for (i, (&r, &ok)) in self.ranges_m.iter().zip(&self.valid).enumerate() {
             let angle = self.start_angle_rad + self.increment_rad * i as f32;
-            scan.push(if ok { Beam::new(angle, r) } else { Beam::invalid(angle) })?;
+            scan.push(if ok {
+                Beam::new(angle, r)
+            } else {
+                Beam::invalid(angle)
+            })?;
         }
         Ok(scan)
     }

@@ -25,4 +25,3 @@ pub fn write_robotlaser1<W: Write>(w: &mut W, rec: &LaserRecord, hostname: &str)
         rec.timestamp_text, rec.timestamp_text
     )
 }
-

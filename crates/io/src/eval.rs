@@ -1,0 +1,177 @@
+//! The relations metric (Kuemmerle et al. 2009; DESIGN.md §6).
+//!
+//! For each relation, the estimated motion d = inv(x_i) x_j is compared with the reference d*
+//! through e = inv(d*) d. Relations whose timestamps are not both in the trajectory are counted,
+//! never silently dropped.
+
+use crate::relations::Relation;
+use crate::trajectory::TrajectoryPoint;
+
+/// Relation stamps carry as few as 5 decimals; scans are at least tens of ms apart.
+pub const DEFAULT_TIME_TOLERANCE_S: f64 = 1e-3;
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EvalSummary {
+    pub relations: usize,
+    pub matched: usize,
+    pub trans_mean_m: f64,
+    pub trans_std_m: f64,
+    pub trans2_mean_m2: f64,
+    pub rot_mean_deg: f64,
+    pub rot_std_deg: f64,
+    pub rot2_mean_deg2: f64,
+    /// Per matched relation: (index into the relations, translational error m, rotational error deg).
+    pub errors: Vec<(usize, f64, f64)>,
+}
+
+/// Finds trajectory poses by timestamp within a tolerance, in a file that may be out of order.
+struct StampIndex<'a> {
+    sorted: Vec<(f64, usize)>,
+    points: &'a [TrajectoryPoint],
+    tolerance_s: f64,
+}
+
+impl<'a> StampIndex<'a> {
+    fn new(points: &'a [TrajectoryPoint], tolerance_s: f64) -> Self {
+        let mut sorted: Vec<(f64, usize)> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.timestamp_s, i))
+            .collect();
+        sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        Self {
+            sorted,
+            points,
+            tolerance_s,
+        }
+    }
+
+    fn find(&self, t: f64) -> Option<&'a TrajectoryPoint> {
+        let k = self.sorted.partition_point(|&(s, _)| s < t);
+        [k.checked_sub(1), Some(k)]
+            .into_iter()
+            .flatten()
+            .filter_map(|k| self.sorted.get(k))
+            .map(|&(s, i)| ((s - t).abs(), i))
+            .filter(|&(d, _)| d <= self.tolerance_s)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, i)| &self.points[i])
+    }
+}
+
+pub fn evaluate(
+    trajectory: &[TrajectoryPoint],
+    relations: &[Relation],
+    tolerance_s: f64,
+) -> EvalSummary {
+    let index = StampIndex::new(trajectory, tolerance_s);
+    let mut errors = Vec::new();
+    for (k, rel) in relations.iter().enumerate() {
+        let (Some(a), Some(b)) = (index.find(rel.t1_s), index.find(rel.t2_s)) else {
+            continue;
+        };
+        let estimated = a.pose.between(b.pose);
+        let e = rel.motion.inverse().compose(estimated);
+        errors.push((k, e.x_m.hypot(e.y_m), e.theta_rad.abs().to_degrees()));
+    }
+    let (trans_mean_m, trans_std_m, trans2_mean_m2) = moments(errors.iter().map(|e| e.1));
+    let (rot_mean_deg, rot_std_deg, rot2_mean_deg2) = moments(errors.iter().map(|e| e.2));
+    EvalSummary {
+        relations: relations.len(),
+        matched: errors.len(),
+        trans_mean_m,
+        trans_std_m,
+        trans2_mean_m2,
+        rot_mean_deg,
+        rot_std_deg,
+        rot2_mean_deg2,
+        errors,
+    }
+}
+
+/// Mean, population standard deviation and mean square; zeros for an empty set.
+fn moments(values: impl Iterator<Item = f64> + Clone) -> (f64, f64, f64) {
+    let n = values.clone().count();
+    if n == 0 {
+        return (0.0, 0.0, 0.0);
+    }
+    let mean = values.clone().sum::<f64>() / n as f64;
+    let mean2 = values.clone().map(|v| v * v).sum::<f64>() / n as f64;
+    let var = values.map(|v| (v - mean) * (v - mean)).sum::<f64>() / n as f64;
+    (mean, var.sqrt(), mean2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::carmen::OdomPose;
+
+    fn point(t: f64, x: f64, y: f64, th: f64) -> TrajectoryPoint {
+        TrajectoryPoint {
+            timestamp_text: format!("{t}"),
+            timestamp_s: t,
+            pose: OdomPose::new(x, y, th),
+        }
+    }
+
+    #[test]
+    fn a_perfect_trajectory_scores_zero_and_a_shifted_one_scores_the_shift() {
+        let truth = [
+            point(1.0, 0.0, 0.0, 0.0),
+            point(2.0, 1.0, 0.0, 0.5),
+            point(3.0, 1.5, 1.0, 1.5),
+        ];
+        let rel = |i: usize, j: usize| Relation {
+            t1_s: truth[i].timestamp_s,
+            t2_s: truth[j].timestamp_s + 4e-6,
+            motion: truth[i].pose.between(truth[j].pose),
+        };
+        let rels = [rel(0, 1), rel(1, 2), rel(2, 0)];
+        let s = evaluate(&truth, &rels, DEFAULT_TIME_TOLERANCE_S);
+        assert_eq!((s.relations, s.matched), (3, 3));
+        assert!(s.trans_mean_m < 1e-9 && s.rot_mean_deg < 1e-9);
+
+        // The last pose moved 0.3 m along its own x axis: every relation touching it is off by 0.3 m.
+        let mut bent = truth.clone();
+        bent[2].pose = truth[2].pose.compose(OdomPose::new(0.3, 0.0, 0.0));
+        let s = evaluate(&bent, &rels[1..2], DEFAULT_TIME_TOLERANCE_S);
+        assert!((s.trans_mean_m - 0.3).abs() < 1e-9, "{}", s.trans_mean_m);
+        assert!(s.rot_mean_deg < 1e-9);
+    }
+
+    #[test]
+    fn unmatched_relations_are_counted_not_scored() {
+        let traj = [point(1.0, 0.0, 0.0, 0.0), point(2.0, 1.0, 0.0, 0.0)];
+        let rels = [
+            Relation {
+                t1_s: 1.0,
+                t2_s: 2.0,
+                motion: OdomPose::new(1.0, 0.0, 0.0),
+            },
+            Relation {
+                t1_s: 1.0,
+                t2_s: 2.5,
+                motion: OdomPose::new(1.0, 0.0, 0.0),
+            },
+        ];
+        let s = evaluate(&traj, &rels, DEFAULT_TIME_TOLERANCE_S);
+        assert_eq!((s.relations, s.matched), (2, 1));
+    }
+
+    #[test]
+    fn out_of_order_stamps_are_found() {
+        let traj = [
+            point(3.0, 3.0, 0.0, 0.0),
+            point(1.0, 1.0, 0.0, 0.0),
+            point(2.0, 2.0, 0.0, 0.0),
+        ];
+        let rels = [Relation {
+            t1_s: 1.0,
+            t2_s: 3.0,
+            motion: OdomPose::new(2.0, 0.0, 0.0),
+        }];
+        let s = evaluate(&traj, &rels, DEFAULT_TIME_TOLERANCE_S);
+        assert_eq!(s.matched, 1);
+        assert!(s.trans_mean_m < 1e-12);
+    }
+}

@@ -1,0 +1,68 @@
+//! Whitespace-separated numeric tables (relations, trajectories): one parser with line-numbered
+//! errors so both file types fail the same clear way.
+
+use crate::carmen::ReadError;
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+
+/// One parsed row: the raw first field (timestamps are kept as written) and all fields as numbers.
+pub struct Row<'a> {
+    pub first_text: &'a str,
+    pub values: Vec<f64>,
+}
+
+/// Reads a file (gzip when it ends in `.gz`) into rows of exactly `columns` finite numbers.
+/// Blank lines and `#` comments are passed over.
+pub fn read_rows(
+    path: &Path,
+    columns: usize,
+    mut visit: impl FnMut(Row) -> Result<(), ReadError>,
+) -> Result<(), ReadError> {
+    let name = path.display().to_string();
+    let file = std::fs::File::open(path).map_err(|e| ReadError {
+        file: name.clone(),
+        line: 0,
+        message: e.to_string(),
+    })?;
+    let reader: Box<dyn Read> = if name.ends_with(".gz") {
+        Box::new(flate2::read::MultiGzDecoder::new(file))
+    } else {
+        Box::new(file)
+    };
+    for (i, line) in BufReader::new(reader).lines().enumerate() {
+        let err = |message: String| ReadError {
+            file: name.clone(),
+            line: i + 1,
+            message,
+        };
+        let line = line.map_err(|e| err(format!("cannot read: {e}")))?;
+        let trimmed = line.trim();
+        if trimmed.is_empty() || trimmed.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = trimmed.split_ascii_whitespace().collect();
+        if fields.len() != columns {
+            return Err(err(format!(
+                "expected {columns} fields, found {}",
+                fields.len()
+            )));
+        }
+        let mut values = Vec::with_capacity(columns);
+        for (k, f) in fields.iter().enumerate() {
+            match f.parse::<f64>() {
+                Ok(v) if v.is_finite() => values.push(v),
+                _ => {
+                    return Err(err(format!(
+                        "field {} is not a finite number: {f:?}",
+                        k + 1
+                    )))
+                }
+            }
+        }
+        visit(Row {
+            first_text: fields[0],
+            values,
+        })?;
+    }
+    Ok(())
+}
