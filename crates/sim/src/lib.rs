@@ -1,3 +1,9 @@
 //! Plumbline's quadrotor simulator (f64): worlds, rigid-body dynamics, motors, battery,
 //! emulated sensors, disturbances and the lockstep runner that drives the onboard code.
 #![forbid(unsafe_code)]
+
+pub mod battery;
+pub mod dynamics;
+pub mod math;
+pub mod rng;
+pub mod vehicle;
