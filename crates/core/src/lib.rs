@@ -10,4 +10,5 @@
 pub mod geom;
 pub mod msgs;
 pub mod scan;
+pub mod lidar;
 pub mod matching;

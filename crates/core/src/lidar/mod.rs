@@ -1,0 +1,43 @@
+//! Sans-I/O lidar decoders: bytes in, revolutions out.
+//!
+//! Each decoder is fed one byte at a time by whoever owns the port or the file (the std side in
+//! `plumbline-io`, a UART interrupt on a microcontroller, a fuzzer); none reads a clock or a
+//! port, so a recorded capture drives exactly the code a live device does. Device conventions
+//! (clockwise degrees, step numbers) are converted to Plumbline's [`Scan`](crate::scan::Scan)
+//! convention at this edge: counter-clockwise radians, per-beam validity, per-beam time.
+//!
+//! Malformed input never panics: it is dropped and counted in [`DecodeStats`], and a decoder
+//! resynchronises on the next frame start. Missing data leaves invalid beams at the angles it
+//! would have filled; beams are never shifted to close a gap.
+//!
+//! State sizes (bytes, `core::mem::size_of`, printed and bounded by a test): see each decoder.
+
+pub mod xv11;
+pub mod xv11_revolution;
+
+#[cfg(test)]
+mod test_encoders;
+
+/// Counters a decoder keeps about what it saw. One struct for every device so summaries and
+/// tests read the same way; a field a device cannot produce stays 0 (documented per field).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DecodeStats {
+    /// Every byte pushed.
+    pub bytes: u64,
+    /// Frames (packets, lines, nodes) that passed every check.
+    pub packets_ok: u32,
+    /// Frames whose checksum (XV-11 packet, SCIP line sum, RPLIDAR check bits) was wrong.
+    pub bad_checksum: u32,
+    /// Frames well delimited but impossible (bad index, unknown status, torn old-firmware frame).
+    pub malformed: u32,
+    /// Bytes discarded while searching for a frame start (garbage, wrong baud rate).
+    pub skipped_bytes: u64,
+    /// Revolutions handed out, complete or not.
+    pub revolutions: u32,
+    /// XV-11: packets whose index was lower than the one before without being a wrap.
+    pub out_of_order: u32,
+    /// XV-11: packets absent from the revolutions handed out (each leaves four invalid beams).
+    pub missing_packets: u32,
+    /// Readings that did not fit the revolution buffer (RPLIDAR, SCIP with too many steps).
+    pub overflow: u32,
+}
