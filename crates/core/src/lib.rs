@@ -12,3 +12,4 @@ pub mod msgs;
 pub mod scan;
 pub mod lidar;
 pub mod matching;
+pub mod control;

@@ -5,6 +5,9 @@
 //! is ENU-like (z up), body is FLU (x forward, y left, z up). Times are seconds as `f64` (the
 //! simulator's clock); onboard steps themselves take `dt: f32`.
 
+/// Standard gravity; the simulator and the onboard code must agree on it.
+pub const GRAVITY_M_S2: f32 = 9.806_65;
+
 /// One inertial sample in the body FLU frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ImuSample {

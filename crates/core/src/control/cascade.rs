@@ -1,0 +1,463 @@
+//! The cascaded loops of seed 002 sec. II.B.3: position -> velocity -> attitude -> rate.
+//!
+//! "A position control loop generates a velocity command, a velocity control loop generates an
+//! attitude command, and an attitude control loop generates servo commands to stabilize the
+//! vehicle by controlling the angular rate." Each loop is a [`Pid`] with output limits, so the
+//! saturations of Kannan's cascade (seed 002 ref. 12) bound what an outer loop can ask for:
+//! speed, tilt, body rate. The innermost rate loop is the rate-damping law of seed 002 eqs. 4-6
+//! ([`crate::control::sas`]) with the pilot's deflection replaced by gain x rate setpoint, plus an
+//! integral; the collective comes from the vertical loops and is tilt-compensated.
+//! Attitude errors are taken on Euler angles, which is adequate within the tilt limit.
+
+use super::mixer::Demand;
+use super::pid::{Pid, PidConfig, PidError};
+use crate::geom::normalize_angle;
+use crate::msgs::{EstimatedState, GRAVITY_M_S2};
+use libm::{atanf, cosf, sinf, sqrtf};
+
+/// Gains and limits of the whole cascade, for the nominal 1 kg, 0.17 m-arm X quadrotor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CascadeConfig {
+    /// Horizontal position error (m) -> velocity setpoint (m/s), per world axis.
+    pub position_xy: PidConfig,
+    /// Height error (m) -> climb-rate setpoint (m/s).
+    pub position_z: PidConfig,
+    /// Horizontal velocity error (m/s) -> acceleration (m/s^2), per world axis.
+    pub velocity_xy: PidConfig,
+    /// Climb-rate error (m/s) -> vertical acceleration (m/s^2).
+    pub velocity_z: PidConfig,
+    /// Roll or pitch error (rad) -> body rate setpoint (rad/s).
+    pub attitude_rp: PidConfig,
+    /// Heading error (rad) -> yaw rate setpoint (rad/s).
+    pub attitude_yaw: PidConfig,
+    /// Roll or pitch rate error (rad/s) -> normalised deflection; `kp` is the SAS gain.
+    pub rate_rp: PidConfig,
+    /// Yaw rate error (rad/s) -> normalised deflection.
+    pub rate_yaw: PidConfig,
+    /// Largest tilt the velocity loop may command (rad).
+    pub max_tilt_rad: f32,
+    /// Collective that holds the vehicle up when level (fraction of full thrust per motor).
+    pub hover_collective: f32,
+    /// Collective bounds, so a descent never cuts the motors and a climb leaves torque margin.
+    pub min_collective: f32,
+    pub max_collective: f32,
+}
+
+impl Default for CascadeConfig {
+    fn default() -> Self {
+        Self {
+            position_xy: PidConfig::p(1.0, 1.0),
+            position_z: PidConfig::p(1.5, 0.8),
+            velocity_xy: PidConfig {
+                kp: 2.5,
+                ki: 0.6,
+                kd: 0.0,
+                integral_limit: 1.5,
+                output_limit: 4.0,
+                derivative_tau_s: 0.0,
+            },
+            velocity_z: PidConfig {
+                kp: 4.0,
+                ki: 1.0,
+                kd: 0.0,
+                integral_limit: 3.0,
+                output_limit: 5.0,
+                derivative_tau_s: 0.0,
+            },
+            attitude_rp: PidConfig::p(7.0, 4.0),
+            attitude_yaw: PidConfig::p(3.0, 1.5),
+            rate_rp: PidConfig {
+                kp: 0.08,
+                ki: 0.1,
+                kd: 0.001,
+                integral_limit: 0.05,
+                output_limit: 0.4,
+                derivative_tau_s: 0.01,
+            },
+            rate_yaw: PidConfig {
+                kp: 0.15,
+                ki: 0.1,
+                kd: 0.0,
+                integral_limit: 0.05,
+                output_limit: 0.2,
+                derivative_tau_s: 0.0,
+            },
+            max_tilt_rad: 0.35,
+            hover_collective: 0.5,
+            min_collective: 0.08,
+            max_collective: 0.9,
+        }
+    }
+}
+
+/// What the guidance asks of the cascade.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CascadeSetpoint {
+    pub position_m: [f32; 3],
+    pub yaw_rad: f32,
+    /// When set, the height loop is bypassed and this climb rate (m/s, up positive) is flown
+    /// instead: landing descends at a rate, not to a height.
+    pub climb_rate_m_s: Option<f32>,
+}
+
+/// Attitude and collective asked of the inner loops.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AttitudeTarget {
+    pub roll_rad: f32,
+    pub pitch_rad: f32,
+    pub yaw_rad: f32,
+    pub collective: f32,
+}
+
+/// The state of all twelve loops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cascade {
+    pub config: CascadeConfig,
+    position: [Pid; 3],
+    velocity: [Pid; 3],
+    attitude: [Pid; 3],
+    rate: [Pid; 3],
+}
+
+impl Cascade {
+    pub fn new(config: CascadeConfig) -> Self {
+        let c = config;
+        Self {
+            config,
+            position: [
+                Pid::new(c.position_xy),
+                Pid::new(c.position_xy),
+                Pid::new(c.position_z),
+            ],
+            velocity: [
+                Pid::new(c.velocity_xy),
+                Pid::new(c.velocity_xy),
+                Pid::new(c.velocity_z),
+            ],
+            attitude: [
+                Pid::new(c.attitude_rp),
+                Pid::new(c.attitude_rp),
+                Pid::new(c.attitude_yaw),
+            ],
+            rate: [
+                Pid::new(c.rate_rp),
+                Pid::new(c.rate_rp),
+                Pid::new(c.rate_yaw),
+            ],
+        }
+    }
+
+    /// Forgets all integrals and derivative history (mode changes, touchdown).
+    pub fn reset(&mut self) {
+        for pid in self
+            .position
+            .iter_mut()
+            .chain(self.velocity.iter_mut())
+            .chain(self.attitude.iter_mut())
+            .chain(self.rate.iter_mut())
+        {
+            pid.reset();
+        }
+    }
+
+    /// Runs all four loops: setpoint and estimate in, mixer demand out. `integrate` false
+    /// freezes every integral (the mixer saturated last step, or the vehicle is on the ground).
+    pub fn run(
+        &mut self,
+        setpoint: &CascadeSetpoint,
+        state: &EstimatedState,
+        gyro_rad_s: [f32; 3],
+        dt: f32,
+        integrate: bool,
+    ) -> Result<Demand, PidError> {
+        let velocity_sp = self.velocity_setpoint(setpoint, state, dt)?;
+        let target = self.attitude_target(velocity_sp, setpoint.yaw_rad, state, dt, integrate)?;
+        let rate_sp = self.rate_setpoint(&target, state, dt)?;
+        self.demand(&target, rate_sp, gyro_rad_s, dt, integrate)
+    }
+
+    /// Position loop: world velocity setpoint (m/s).
+    pub fn velocity_setpoint(
+        &mut self,
+        setpoint: &CascadeSetpoint,
+        state: &EstimatedState,
+        dt: f32,
+    ) -> Result<[f32; 3], PidError> {
+        let mut v = [0.0; 3];
+        for (axis, out) in v.iter_mut().enumerate().take(2) {
+            let (sp, x) = (setpoint.position_m[axis], state.position_m[axis]);
+            *out = self.position[axis].update(sp, x, 0.0, dt, false)?;
+        }
+        v[2] = match setpoint.climb_rate_m_s {
+            Some(rate) if rate.is_finite() => rate,
+            Some(_) => return Err(PidError::NonFinite),
+            None => self.position[2].update(
+                setpoint.position_m[2],
+                state.position_m[2],
+                0.0,
+                dt,
+                false,
+            )?,
+        };
+        Ok(v)
+    }
+
+    /// Velocity loop: acceleration demand turned into tilt and a tilt-compensated collective.
+    pub fn attitude_target(
+        &mut self,
+        velocity_sp: [f32; 3],
+        yaw_sp: f32,
+        state: &EstimatedState,
+        dt: f32,
+        integrate: bool,
+    ) -> Result<AttitudeTarget, PidError> {
+        let c = &self.config;
+        let mut accel = [0.0; 3];
+        for (axis, out) in accel.iter_mut().enumerate() {
+            let v = state.velocity_m_s[axis];
+            *out = self.velocity[axis].update(velocity_sp[axis], v, 0.0, dt, integrate)?;
+        }
+        // Vertical: never ask for less than 30 % of gravity, so the vehicle stays upright.
+        let lift = (GRAVITY_M_S2 + accel[2]).max(0.3 * GRAVITY_M_S2);
+        // Horizontal demand rotated into the heading frame, bounded by the tilt limit.
+        let (s, co) = (sinf(state.yaw_rad), cosf(state.yaw_rad));
+        let mut ax = co * accel[0] + s * accel[1];
+        let mut ay = -s * accel[0] + co * accel[1];
+        let max_h = lift * libm::tanf(c.max_tilt_rad);
+        let h = sqrtf(ax * ax + ay * ay);
+        if h > max_h {
+            ax *= max_h / h;
+            ay *= max_h / h;
+        }
+        // ZYX Euler, FLU: thrust along body z tilts to (cos(phi) sin(theta), -sin(phi)).
+        let pitch = atanf(ax / lift);
+        let roll = atanf(-ay * cosf(pitch) / lift);
+        let tilt = cosf(state.roll_rad) * cosf(state.pitch_rad);
+        let collective = c.hover_collective * lift / GRAVITY_M_S2 / tilt.max(0.5);
+        Ok(AttitudeTarget {
+            roll_rad: roll,
+            pitch_rad: pitch,
+            yaw_rad: yaw_sp,
+            collective: collective.clamp(c.min_collective, c.max_collective),
+        })
+    }
+
+    /// Attitude loop: body rate setpoint (rad/s); heading error wraps to (-pi, pi].
+    pub fn rate_setpoint(
+        &mut self,
+        target: &AttitudeTarget,
+        state: &EstimatedState,
+        dt: f32,
+    ) -> Result<[f32; 3], PidError> {
+        let errors = [
+            target.roll_rad - state.roll_rad,
+            target.pitch_rad - state.pitch_rad,
+            normalize_angle(target.yaw_rad - state.yaw_rad),
+        ];
+        let mut rates = [0.0; 3];
+        for (axis, out) in rates.iter_mut().enumerate() {
+            *out = self.attitude[axis].update(errors[axis], 0.0, 0.0, dt, false)?;
+        }
+        Ok(rates)
+    }
+
+    /// Rate loop (seed 002 eqs. 4-6 plus integral): deflections, packed with the collective.
+    pub fn demand(
+        &mut self,
+        target: &AttitudeTarget,
+        rate_sp: [f32; 3],
+        gyro_rad_s: [f32; 3],
+        dt: f32,
+        integrate: bool,
+    ) -> Result<Demand, PidError> {
+        let mut d = [0.0; 3];
+        for (axis, out) in d.iter_mut().enumerate() {
+            *out = self.rate[axis].update(rate_sp[axis], gyro_rad_s[axis], 0.0, dt, integrate)?;
+        }
+        Ok(Demand {
+            collective: target.collective,
+            roll: d[0],
+            pitch: d[1],
+            yaw: d[2],
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn level_at(position_m: [f32; 3]) -> EstimatedState {
+        EstimatedState {
+            position_m,
+            valid: true,
+            ..Default::default()
+        }
+    }
+
+    fn hold(position_m: [f32; 3]) -> CascadeSetpoint {
+        CascadeSetpoint {
+            position_m,
+            yaw_rad: 0.0,
+            climb_rate_m_s: None,
+        }
+    }
+
+    #[test]
+    fn at_the_setpoint_it_asks_for_hover_and_nothing_else() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let s = level_at([1.0, 2.0, 1.0]);
+        let d = c
+            .run(&hold([1.0, 2.0, 1.0]), &s, [0.0; 3], 0.002, true)
+            .unwrap();
+        assert!((d.collective - 0.5).abs() < 1e-6);
+        assert_eq!((d.roll, d.pitch, d.yaw), (0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn target_ahead_pitches_nose_down_and_target_left_rolls_left_side_down() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let s = level_at([0.0, 0.0, 1.0]);
+        let v = c
+            .velocity_setpoint(&hold([0.5, 0.0, 1.0]), &s, 0.01)
+            .unwrap();
+        assert!((v[0] - 0.5).abs() < 1e-6 && v[1] == 0.0 && v[2] == 0.0);
+        let t = c.attitude_target(v, 0.0, &s, 0.01, true).unwrap();
+        assert!(t.pitch_rad > 0.0 && t.roll_rad.abs() < 1e-6);
+        // Heading 90 degrees: the world +x target is now to the vehicle's right.
+        let s_left = EstimatedState {
+            yaw_rad: core::f32::consts::FRAC_PI_2,
+            ..s
+        };
+        let t = Cascade::new(CascadeConfig::default())
+            .attitude_target([0.5, 0.0, 0.0], 0.0, &s_left, 0.01, true)
+            .unwrap();
+        assert!(t.roll_rad > 0.0 && t.pitch_rad.abs() < 1e-5, "{t:?}");
+    }
+
+    #[test]
+    fn tilt_and_speed_stay_within_limits_for_a_far_setpoint() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let s = level_at([0.0, 0.0, 1.0]);
+        let v = c
+            .velocity_setpoint(&hold([100.0, -100.0, 1.0]), &s, 0.01)
+            .unwrap();
+        assert!(v[0] <= 1.0 && v[1] >= -1.0);
+        let t = c
+            .attitude_target([50.0, 50.0, 0.0], 0.0, &s, 0.01, true)
+            .unwrap();
+        let tilt = libm::acosf(cosf(t.roll_rad) * cosf(t.pitch_rad));
+        assert!(tilt <= 0.35 + 1e-3, "{tilt}");
+    }
+
+    #[test]
+    fn collective_compensates_tilt_and_climb() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let tilted = EstimatedState {
+            roll_rad: 0.3,
+            ..level_at([0.0; 3])
+        };
+        let t = c
+            .attitude_target([0.0; 3], 0.0, &tilted, 0.01, false)
+            .unwrap();
+        assert!((t.collective - 0.5 / cosf(0.3)).abs() < 1e-5);
+        let climb = CascadeSetpoint {
+            climb_rate_m_s: Some(0.5),
+            ..hold([0.0; 3])
+        };
+        let v = c
+            .velocity_setpoint(&climb, &level_at([0.0; 3]), 0.01)
+            .unwrap();
+        assert_eq!(v[2], 0.5);
+        let t = c
+            .attitude_target(v, 0.0, &level_at([0.0; 3]), 0.01, false)
+            .unwrap();
+        assert!(t.collective > 0.5);
+    }
+
+    #[test]
+    fn heading_error_takes_the_short_way_round() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let s = EstimatedState {
+            yaw_rad: 3.0,
+            ..level_at([0.0; 3])
+        };
+        let t = AttitudeTarget {
+            yaw_rad: -3.0,
+            ..Default::default()
+        };
+        let r = c.rate_setpoint(&t, &s, 0.01).unwrap();
+        // -3 - 3 wraps to +0.283: turn counter-clockwise, not 6 rad clockwise.
+        assert!(r[2] > 0.0 && r[2] < 1.0, "{r:?}");
+    }
+
+    #[test]
+    fn rate_loop_p_term_is_the_sas_law() {
+        let config = CascadeConfig::default();
+        let mut c = Cascade::new(config);
+        let sas = super::super::sas::SasConfig {
+            gains_per_rad_s: [config.rate_rp.kp; 3],
+            stick_authority: [0.0; 3],
+        };
+        let gyro = [0.3, -0.2, 0.0];
+        let d = c
+            .demand(&AttitudeTarget::default(), [0.0; 3], gyro, 0.01, false)
+            .unwrap();
+        let damped = super::super::sas::damp(&sas, [0.0; 3], gyro);
+        // First step: no derivative history, no integral: exactly eqs. 4-5.
+        assert!((d.roll - damped[0]).abs() < 1e-6 && (d.pitch - damped[1]).abs() < 1e-6);
+    }
+
+    #[test]
+    fn non_finite_state_is_an_error_not_a_nan() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let s = level_at([f32::NAN, 0.0, 1.0]);
+        assert_eq!(
+            c.run(&hold([0.0, 0.0, 1.0]), &s, [0.0; 3], 0.01, true),
+            Err(PidError::NonFinite)
+        );
+    }
+
+    /// A point-mass-with-attitude vehicle: the cascade must bring it from 0.3 m off back to the
+    /// setpoint and hold it there (seed 000 Fig. 9: the drift driven to zero).
+    #[test]
+    fn simple_vehicle_returns_to_the_hold_point() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let sp = hold([0.0, 0.0, 1.0]);
+        let mut s = level_at([0.3, -0.2, 0.8]);
+        let mut rates = [0.0f32; 3];
+        let dt = 0.002;
+        for _ in 0..5000 {
+            let d = c.run(&sp, &s, rates, dt, true).unwrap();
+            // Angular acceleration 2300 rad/s^2 per unit deflection (nominal vehicle).
+            rates[0] += 2300.0 * d.roll * dt;
+            rates[1] += 2300.0 * d.pitch * dt;
+            rates[2] += 400.0 * d.yaw * dt;
+            s.roll_rad += rates[0] * dt;
+            s.pitch_rad += rates[1] * dt;
+            s.yaw_rad += rates[2] * dt;
+            let thrust = GRAVITY_M_S2 * d.collective / 0.5;
+            let (cr, sr, cp, sp_) = (
+                cosf(s.roll_rad),
+                sinf(s.roll_rad),
+                cosf(s.pitch_rad),
+                sinf(s.pitch_rad),
+            );
+            let acc = [
+                thrust * cr * sp_,
+                -thrust * sr,
+                thrust * cr * cp - GRAVITY_M_S2,
+            ];
+            for ((v, p), a) in s.velocity_m_s.iter_mut().zip(&mut s.position_m).zip(acc) {
+                *v += a * dt;
+                *p += *v * dt;
+            }
+        }
+        let p = s.position_m;
+        assert!(
+            libm::hypotf(p[0], p[1]) < 0.01 && (p[2] - 1.0).abs() < 0.01,
+            "{p:?}"
+        );
+        assert!(s.roll_rad.abs() < 0.01 && s.pitch_rad.abs() < 0.01);
+    }
+}

@@ -1,0 +1,9 @@
+//! Flight control: PID loops, rate damping, the position-to-rate cascade and the mixer.
+//!
+//! Pure algorithms (DESIGN.md §2): each takes state, setpoint and `dt` and returns an output;
+//! the autopilot in [`crate::flight`] owns timing and modes.
+
+pub mod cascade;
+pub mod mixer;
+pub mod pid;
+pub mod sas;
