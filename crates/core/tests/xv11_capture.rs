@@ -69,3 +69,50 @@ fn a_steady_revolution_sees_a_closed_box() {
         .filter(|b| b.valid)
         .all(|b| b.range_m < 3.0));
 }
+
+/// Old-firmware captures: a binary dump of 21 frames and one frame as hex text.
+mod old_firmware {
+    use super::CAPTURES;
+    use plumbline_core::lidar::xv11_old::Xv11OldDecoder;
+    use plumbline_core::lidar::xv11_revolution::Revolution;
+    use plumbline_core::lidar::DecodeStats;
+
+    fn decode(bytes: &[u8]) -> (Vec<Revolution>, DecodeStats) {
+        let mut d = Xv11OldDecoder::new();
+        let mut revs: Vec<Revolution> = bytes.iter().filter_map(|&b| d.push(b)).collect();
+        revs.extend(d.finish());
+        (revs, d.stats())
+    }
+
+    #[test]
+    fn sparkfun_dump_holds_21_frames() {
+        let bytes = std::fs::read(format!("{CAPTURES}/sparkfun_noshield_dump_oldfw.bin")).unwrap();
+        let (revs, stats) = decode(&bytes);
+        assert_eq!(revs.len(), 21);
+        assert_eq!((stats.skipped_bytes, stats.malformed), (0, 0));
+        // First reading of the first frame: bytes 21 80 AE 00, the invalid flag with code 0x21;
+        // the second: AF 03 CD 00, 943 mm.
+        let first = revs[0].reading(0).unwrap();
+        assert!(first.invalid && first.distance_mm == 0x21);
+        assert_eq!(
+            revs[0].reading(1).map(|r| (r.distance_mm, r.strength)),
+            Some((943, 0xCD))
+        );
+        let scan = revs[0].to_scan(0.0);
+        assert_eq!(scan.len(), 360);
+        assert_eq!(scan.valid_count(), 360 - 118);
+    }
+
+    #[test]
+    fn one_run_hex_text_holds_one_frame() {
+        let text = std::fs::read_to_string(format!("{CAPTURES}/OneRun_no_shield.txt")).unwrap();
+        let bytes: Vec<u8> = text
+            .trim_start_matches('\u{feff}')
+            .split_whitespace()
+            .map(|h| u8::from_str_radix(h, 16).unwrap())
+            .collect();
+        assert_eq!(bytes.len(), 1446);
+        let (revs, stats) = decode(&bytes);
+        assert_eq!((revs.len(), stats.revolutions), (1, 1));
+    }
+}

@@ -13,6 +13,7 @@
 //! State sizes (bytes, `core::mem::size_of`, printed and bounded by a test): see each decoder.
 
 pub mod xv11;
+pub mod xv11_old;
 pub mod xv11_revolution;
 
 #[cfg(test)]
