@@ -6,4 +6,6 @@ pub mod battery;
 pub mod dynamics;
 pub mod math;
 pub mod rng;
+pub mod scene;
 pub mod vehicle;
+pub mod world;
