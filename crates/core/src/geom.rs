@@ -102,10 +102,18 @@ pub struct Pose2 {
 }
 
 impl Pose2 {
-    pub const IDENTITY: Pose2 = Pose2 { x: 0.0, y: 0.0, theta: 0.0 };
+    pub const IDENTITY: Pose2 = Pose2 {
+        x: 0.0,
+        y: 0.0,
+        theta: 0.0,
+    };
 
     pub fn new(x: f32, y: f32, theta: f32) -> Self {
-        Self { x, y, theta: normalize_angle(theta) }
+        Self {
+            x,
+            y,
+            theta: normalize_angle(theta),
+        }
     }
 
     pub fn translation(self) -> Vec2 {
@@ -135,12 +143,22 @@ impl Pose2 {
 
     pub fn inverse(self) -> Pose2 {
         let (s, c) = (sinf(self.theta), cosf(self.theta));
-        Pose2::new(-(c * self.x + s * self.y), s * self.x - c * self.y, -self.theta)
+        Pose2::new(
+            -(c * self.x + s * self.y),
+            s * self.x - c * self.y,
+            -self.theta,
+        )
     }
 
     /// The motion from `self` to `other`, expressed in the frame of `self`: `inverse(self) * other`.
     pub fn between(self, other: Pose2) -> Pose2 {
         self.inverse().compose(other)
+    }
+
+    /// How far apart two poses are: (translation distance m, absolute rotation rad).
+    pub fn distance_to(self, o: Pose2) -> (f32, f32) {
+        let d = self.between(o);
+        (d.translation().norm(), normalize_angle(d.theta).abs())
     }
 }
 

@@ -21,16 +21,29 @@ pub struct Beam {
 impl Beam {
     /// A beam that is valid only when its range is finite and strictly positive.
     pub fn new(angle_rad: f32, range_m: f32) -> Self {
-        Self { angle_rad, range_m, time_offset_s: 0.0, valid: range_m.is_finite() && range_m > 0.0 }
+        Self {
+            angle_rad,
+            range_m,
+            time_offset_s: 0.0,
+            valid: range_m.is_finite() && range_m > 0.0,
+        }
     }
 
     pub fn invalid(angle_rad: f32) -> Self {
-        Self { angle_rad, range_m: 0.0, time_offset_s: 0.0, valid: false }
+        Self {
+            angle_rad,
+            range_m: 0.0,
+            time_offset_s: 0.0,
+            valid: false,
+        }
     }
 
     /// The hit point in the sensor frame.
     pub fn point(&self) -> Vec2 {
-        Vec2::new(self.range_m * cosf(self.angle_rad), self.range_m * sinf(self.angle_rad))
+        Vec2::new(
+            self.range_m * cosf(self.angle_rad),
+            self.range_m * sinf(self.angle_rad),
+        )
     }
 }
 
@@ -59,7 +72,11 @@ impl<const N: usize> Scan<N> {
     pub const CAPACITY: usize = N;
 
     pub fn new(stamp_s: f64) -> Self {
-        Self { stamp_s, beams: [Beam::default(); N], len: 0 }
+        Self {
+            stamp_s,
+            beams: [Beam::default(); N],
+            len: 0,
+        }
     }
 
     pub fn clear(&mut self, stamp_s: f64) {
@@ -68,7 +85,10 @@ impl<const N: usize> Scan<N> {
     }
 
     pub fn push(&mut self, beam: Beam) -> Result<(), ScanFull> {
-        let slot = self.beams.get_mut(self.len).ok_or(ScanFull { capacity: N })?;
+        let slot = self
+            .beams
+            .get_mut(self.len)
+            .ok_or(ScanFull { capacity: N })?;
         *slot = beam;
         self.len += 1;
         Ok(())
@@ -102,7 +122,11 @@ impl<const N: usize> Scan<N> {
         for (i, &r) in ranges_m.iter().enumerate() {
             let angle = start_angle_rad + increment_rad * i as f32;
             let ok = r.is_finite() && r > 0.0 && is_valid(r);
-            let beam = if ok { Beam::new(angle, r) } else { Beam::invalid(angle) };
+            let beam = if ok {
+                Beam::new(angle, r)
+            } else {
+                Beam::invalid(angle)
+            };
             scan.push(beam)?;
         }
         Ok(scan)

@@ -1,1 +1,154 @@
-//! Scan-to-scan matchers (seed 000 sec. 4): icl-paper, icl, icp, plicp.
+//! Scan-to-scan matching (seed 000 sec. 4): how the vehicle moved between two revolutions.
+//!
+//! [`ScanMatcher`] holds a prepared reference scan and matches new scans against it with the
+//! configured [`MatcherKind`]. All state is inline, sized by the const generic `N` (beams per
+//! scan), so `size_of::<ScanMatcher<360>>()` is the whole RAM cost.
+
+mod associate;
+mod config;
+mod driver;
+mod fast_math;
+mod icl_paper;
+mod linalg;
+mod metrics;
+mod prepared;
+mod result;
+
+pub use config::{MatchConfig, MatcherKind};
+pub use icl_paper::closest_point_on_line;
+pub use prepared::PreparedScan;
+pub use result::{MatchError, MatchQuality, MatchResult, MatchStatus, UNOBSERVED_VARIANCE};
+
+use crate::geom::{Pose2, Vec2};
+use crate::scan::Scan;
+use associate::PassGate;
+use metrics::{PointToLineGaussNewton, PointToPointClosedForm, PointToSegmentExact};
+
+/// A scan matcher with room for scans of up to `N` beams.
+#[derive(Clone, Debug)]
+pub struct ScanMatcher<const N: usize> {
+    config: MatchConfig,
+    /// Two scan slots; `reference` says which one is the reference.
+    slots: [PreparedScan<N>; 2],
+    reference: usize,
+    has_reference: bool,
+    /// Translation of the previous match, for the seed 000 sec. 4.2 test.
+    previous_translation: Vec2,
+}
+
+impl<const N: usize> ScanMatcher<N> {
+    pub fn new(config: MatchConfig) -> Self {
+        Self {
+            config,
+            slots: [PreparedScan::default(), PreparedScan::default()],
+            reference: 0,
+            has_reference: false,
+            previous_translation: Vec2::ZERO,
+        }
+    }
+
+    pub fn config(&self) -> &MatchConfig {
+        &self.config
+    }
+
+    pub fn has_reference(&self) -> bool {
+        self.has_reference
+    }
+
+    /// Makes `scan` the reference that later scans are matched against.
+    pub fn set_reference(&mut self, scan: &Scan<N>) -> Result<(), MatchError> {
+        self.has_reference = false;
+        let slot = &mut self.slots[self.reference];
+        slot.load(scan)?;
+        slot.fit_lines(self.config.line_neighbour_m, self.config.line_max_flatness);
+        self.has_reference = true;
+        Ok(())
+    }
+
+    /// Makes the scan of the last `match_scan` call the reference, without preparing it again.
+    pub fn promote_current(&mut self) {
+        self.reference ^= 1;
+        let slot = &mut self.slots[self.reference];
+        slot.fit_lines(self.config.line_neighbour_m, self.config.line_max_flatness);
+        self.has_reference = true;
+    }
+
+    /// Where `scan` was taken, in the reference scan's frame, starting from `guess`.
+    pub fn match_scan(&mut self, scan: &Scan<N>, guess: Pose2) -> Result<MatchResult, MatchError> {
+        if !guess.is_finite() {
+            return Err(MatchError::NonFiniteGuess);
+        }
+        if !self.has_reference {
+            return Err(MatchError::NoReference);
+        }
+        let [a, b] = &mut self.slots;
+        let (reference, current) = if self.reference == 0 {
+            (&*a, b)
+        } else {
+            (&*b, a)
+        };
+        current.load(scan)?;
+        let cfg = &self.config;
+        let needed = cfg.min_points.max(3);
+        if reference.len() < needed as usize || current.len() < needed as usize {
+            return Err(MatchError::TooFewPoints {
+                reference: reference.len() as u16,
+                current: current.len() as u16,
+                needed,
+            });
+        }
+        let prev = self.previous_translation;
+        let result = match cfg.kind {
+            MatcherKind::Icl => {
+                driver::run::<PointToLineGaussNewton, N>(reference, current, guess, prev, cfg)
+            }
+            MatcherKind::Plicp => {
+                driver::run::<PointToSegmentExact, N>(reference, current, guess, prev, cfg)
+            }
+            MatcherKind::Icp => {
+                driver::run::<PointToPointClosedForm, N>(reference, current, guess, prev, cfg)
+            }
+            MatcherKind::IclPaper => {
+                let motion = icl_paper::run(
+                    reference,
+                    current,
+                    guess,
+                    cfg.paper_rate_per_point,
+                    cfg.paper_iterations,
+                );
+                Self::paper_report(reference, current, motion, cfg)
+            }
+        }?;
+        self.previous_translation = result.motion.translation();
+        Ok(result)
+    }
+
+    /// The paper's method has no quality measure of its own; score its answer with one pass
+    /// of the shared association so every matcher reports the same fields.
+    fn paper_report(
+        reference: &PreparedScan<N>,
+        current: &PreparedScan<N>,
+        motion: Pose2,
+        cfg: &MatchConfig,
+    ) -> Result<MatchResult, MatchError> {
+        if !motion.is_finite() {
+            return Err(MatchError::Diverged);
+        }
+        let gate = PassGate {
+            gate_m: cfg.max_correspondence_m,
+            kernel_m: cfg.max_correspondence_m,
+            dynamic_threshold_m2: None,
+        };
+        let mut acc = PointToLineGaussNewton::default();
+        let stats = associate::associate(reference, current, motion, &gate, cfg, &mut acc);
+        Ok(driver::report(
+            motion,
+            &stats,
+            None,
+            current.len(),
+            cfg.paper_iterations,
+            0,
+            MatchStatus::IterationLimit,
+        ))
+    }
+}

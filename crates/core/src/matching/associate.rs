@@ -1,0 +1,136 @@
+//! One association pass: every current point, moved by the pose estimate, finds its partner in
+//! the reference through angular projection; gating, the seed 000 sec. 4.2 test and a robust
+//! weight decide how much it counts; a metric-specific accumulator sums it up.
+
+use super::config::MatchConfig;
+use super::linalg::Sym3;
+use super::prepared::PreparedScan;
+use crate::geom::{Pose2, Vec2};
+
+/// What a metric contributes: how it pairs a point and how it sums pairs for its solver.
+pub trait Metric: Default {
+    /// The partner of `q` (current point in the reference frame) near reference point `j`:
+    /// `(target point, unit normal)` for point-to-line, normal zero for point-to-point.
+    fn pair<const N: usize>(
+        reference: &PreparedScan<N>,
+        j: usize,
+        q: Vec2,
+        cfg: &MatchConfig,
+    ) -> Option<(Vec2, Vec2)>;
+    /// Sums one weighted pair (`p` in the current frame, `q` = pose applied to `p`).
+    fn add(&mut self, p: Vec2, q: Vec2, target: Vec2, normal: Vec2, w: f32, pose: Pose2);
+}
+
+/// Residual of a pair: distance to the line, or to the point when there is no normal.
+fn residual(q: Vec2, target: Vec2, normal: Vec2) -> f32 {
+    if normal == Vec2::ZERO {
+        (q - target).norm()
+    } else {
+        normal.dot(q - target)
+    }
+}
+
+/// Statistics of a pass, and the information matrix of the pose for the quality report.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PassStats {
+    pub inliers: u16,
+    pub weighted_sq_sum: f32,
+    pub weight_sum: f32,
+    pub sq_sum: f32,
+    pub rejected_dynamic: u16,
+    /// Information (J^T W J) of (x, y, theta) at the pose of the pass.
+    pub information: Sym3,
+    /// A robust standard deviation of the residual (1.4826 x median |r|), for the next gate.
+    pub robust_sigma: f32,
+}
+
+/// Bins of the residual histogram that gives the median without sorting or storing residuals.
+const HIST_BINS: usize = 32;
+
+/// How the pass gates and weights.
+#[derive(Clone, Copy)]
+pub struct PassGate {
+    /// Largest accepted residual (and, first pass, point distance), m.
+    pub gate_m: f32,
+    /// Cauchy kernel width, m; residuals well below it weigh about 1.
+    pub kernel_m: f32,
+    /// Seed 000 sec. 4.2 threshold on J = r², or `None` when the test is off.
+    pub dynamic_threshold_m2: Option<f32>,
+}
+
+pub fn associate<M: Metric, const N: usize>(
+    reference: &PreparedScan<N>,
+    current: &PreparedScan<N>,
+    pose: Pose2,
+    gate: &PassGate,
+    cfg: &MatchConfig,
+    acc: &mut M,
+) -> PassStats {
+    let mut stats = PassStats::default();
+    let mut hist = [0u16; HIST_BINS];
+    let bin_width = gate.gate_m / HIST_BINS as f32;
+    let gate2 = gate.gate_m * gate.gate_m;
+    let point_gate2 = cfg.max_correspondence_m * cfg.max_correspondence_m;
+    let inv_k2 = 1.0 / (gate.kernel_m * gate.kernel_m);
+    let (s, c) = (libm::sinf(pose.theta), libm::cosf(pose.theta));
+    let mut hint = 0;
+    for &p in current.points() {
+        let rp = Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
+        let q = rp + pose.translation();
+        let Some(k) = reference.project(q, hint) else {
+            continue;
+        };
+        hint = k;
+        let Some((j, d2)) = reference.nearest_in_window(q, k, cfg.search_half_window as usize)
+        else {
+            continue;
+        };
+        if d2 > point_gate2 {
+            continue;
+        }
+        let Some((target, normal)) = M::pair(reference, j, q, cfg) else {
+            continue;
+        };
+        let r = residual(q, target, normal);
+        let r2 = r * r;
+        if gate.dynamic_threshold_m2.is_some_and(|t| r2 > t) {
+            stats.rejected_dynamic += 1;
+            continue;
+        }
+        if r2 > gate2 {
+            continue;
+        }
+        let w = 1.0 / (1.0 + r2 * inv_k2);
+        acc.add(p, q, target, normal, w, pose);
+        let bin = ((r.abs() / bin_width) as usize).min(HIST_BINS - 1);
+        hist[bin] = hist[bin].saturating_add(1);
+        stats.inliers += 1;
+        stats.weighted_sq_sum += w * r2;
+        stats.weight_sum += w;
+        stats.sq_sum += r2;
+        let drp = rp.perp();
+        if normal == Vec2::ZERO {
+            stats.information.add_outer([1.0, 0.0, drp.x], w);
+            stats.information.add_outer([0.0, 1.0, drp.y], w);
+        } else {
+            stats
+                .information
+                .add_outer([normal.x, normal.y, normal.dot(drp)], w);
+        }
+    }
+    stats.robust_sigma = 1.4826 * histogram_median(&hist, stats.inliers, bin_width);
+    stats
+}
+
+fn histogram_median(hist: &[u16; HIST_BINS], count: u16, bin_width: f32) -> f32 {
+    let half = count.div_ceil(2);
+    let mut seen = 0u16;
+    for (i, &h) in hist.iter().enumerate() {
+        if seen + h >= half && h > 0 {
+            let into = (half - seen) as f32 / h as f32;
+            return bin_width * (i as f32 + into);
+        }
+        seen += h;
+    }
+    0.0
+}

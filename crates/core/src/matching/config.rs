@@ -1,0 +1,111 @@
+//! Matcher configuration: one struct, documented defaults, SI units.
+
+/// Which matcher runs (chosen by configuration so every variant sees the same input).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MatcherKind {
+    /// Seed 000 Fig. 4 as written: translation-only gradient descent, fixed iterations,
+    /// the two closest previous points found by brute force. Kept for comparison.
+    IclPaper,
+    /// Plumbline's ICL: point-to-line Gauss-Newton in SE(2) with windowed correspondences,
+    /// seed 000 sec. 4.2 rejection, a robust weight, covariance and degeneracy report.
+    Icl,
+    /// Point-to-point ICP with the closed-form 2-D rotation (the GTAR team's choice, seed 002).
+    Icp,
+    /// Point-to-line ICP solved exactly for fixed correspondences (Censi 2008).
+    Plicp,
+}
+
+impl MatcherKind {
+    pub const ALL: [MatcherKind; 4] = [
+        MatcherKind::IclPaper,
+        MatcherKind::Icl,
+        MatcherKind::Icp,
+        MatcherKind::Plicp,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            MatcherKind::IclPaper => "icl-paper",
+            MatcherKind::Icl => "icl",
+            MatcherKind::Icp => "icp",
+            MatcherKind::Plicp => "plicp",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatchConfig {
+    pub kind: MatcherKind,
+    /// Association passes at most.
+    pub max_iterations: u16,
+    /// Valid points needed in each scan, and correspondences needed to solve.
+    pub min_points: u16,
+    /// Farthest a current point may be from its reference point in the first pass, m.
+    pub max_correspondence_m: f32,
+    /// Later passes gate at `gate_sigmas` robust standard deviations of the residual, but never
+    /// tighter than this, m.
+    pub min_gate_m: f32,
+    pub gate_sigmas: f32,
+    /// Reference points searched either side of the projected bearing.
+    pub search_half_window: u16,
+    /// Neighbours closer than this share a local line (and PL-ICP segments are no longer), m.
+    pub line_neighbour_m: f32,
+    /// Smallest/largest spread of a local neighbourhood for it to count as a line.
+    pub line_max_flatness: f32,
+    /// Converged when an update moves less than these.
+    pub convergence_m: f32,
+    pub convergence_rad: f32,
+    /// A translation direction is degenerate (a featureless corridor) when its information is
+    /// below this fraction of the best-constrained direction's.
+    pub degenerate_ratio: f32,
+    /// Seed 000 sec. 4.2: a point is dynamic or an outlier when its cost J at the initial guess
+    /// exceeds `gain * (dx_prev^2 + dy_prev^2) + floor^2`.
+    pub dynamic_rejection: bool,
+    pub dynamic_gain: f32,
+    pub dynamic_floor_m: f32,
+    /// A solution farther than this from the initial guess is reported as diverged.
+    pub max_correction_m: f32,
+    pub max_correction_rad: f32,
+    /// `icl-paper` only: learning rate times point count, and its fixed iteration count.
+    pub paper_rate_per_point: f32,
+    pub paper_iterations: u16,
+}
+
+impl Default for MatchConfig {
+    fn default() -> Self {
+        Self {
+            kind: MatcherKind::Icl,
+            max_iterations: 30,
+            min_points: 20,
+            max_correspondence_m: 0.5,
+            min_gate_m: 0.05,
+            gate_sigmas: 4.0,
+            search_half_window: 6,
+            line_neighbour_m: 0.3,
+            line_max_flatness: 0.05,
+            convergence_m: 1e-4,
+            convergence_rad: 1e-4,
+            degenerate_ratio: 0.02,
+            dynamic_rejection: true,
+            dynamic_gain: 4.0,
+            dynamic_floor_m: 0.2,
+            max_correction_m: 1.5,
+            max_correction_rad: 0.8,
+            paper_rate_per_point: 1.0,
+            paper_iterations: 20,
+        }
+    }
+}
+
+impl MatchConfig {
+    pub fn with_kind(kind: MatcherKind) -> Self {
+        Self {
+            kind,
+            ..Self::default()
+        }
+    }
+}

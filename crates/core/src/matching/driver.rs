@@ -1,0 +1,193 @@
+//! The iteration shared by `icl`, `plicp` and `icp`: associate, solve, keep degenerate
+//! directions at the guess, test convergence and divergence, then report quality.
+
+use super::associate::{associate, PassGate, PassStats};
+use super::config::MatchConfig;
+use super::linalg::sym2_eigen;
+use super::metrics::Solve;
+use super::prepared::PreparedScan;
+use super::result::{MatchError, MatchQuality, MatchResult, MatchStatus, UNOBSERVED_VARIANCE};
+use crate::geom::{Pose2, Vec2};
+
+/// Smallest robust residual deviation assumed, m: below the range noise of any lidar.
+const MIN_SIGMA_M: f32 = 0.005;
+
+pub fn run<S: Solve, const N: usize>(
+    reference: &PreparedScan<N>,
+    current: &PreparedScan<N>,
+    guess: Pose2,
+    previous_translation: Vec2,
+    cfg: &MatchConfig,
+) -> Result<MatchResult, MatchError> {
+    let needed = cfg.min_points.max(3);
+    let mut pose = guess;
+    let mut sigma = cfg.max_correspondence_m / cfg.gate_sigmas.max(1.0);
+    let mut dynamic = cfg.dynamic_rejection.then(|| {
+        cfg.dynamic_gain * previous_translation.norm_squared()
+            + cfg.dynamic_floor_m * cfg.dynamic_floor_m
+    });
+    let mut rejected_dynamic = 0;
+    let mut status = MatchStatus::IterationLimit;
+    let mut iterations = 0;
+    let mut last = PassStats::default();
+    let mut degenerate = None;
+    while iterations < cfg.max_iterations.max(1) {
+        let first = iterations == 0;
+        let gate_m = if first {
+            cfg.max_correspondence_m
+        } else {
+            (cfg.gate_sigmas * sigma).clamp(cfg.min_gate_m, cfg.max_correspondence_m)
+        };
+        let gate = PassGate {
+            gate_m,
+            kernel_m: 2.0 * gate_m / cfg.gate_sigmas.max(1.0),
+            dynamic_threshold_m2: dynamic.filter(|_| first),
+        };
+        let mut acc = S::default();
+        let mut stats = associate(reference, current, pose, &gate, cfg, &mut acc);
+        if first && stats.rejected_dynamic as usize * 2 > current.len() {
+            // Seed 000 sec. 4.2 assumes a good guess; when it rejects most of the scan the guess
+            // is off, not the world. Redo the pass without it.
+            dynamic = None;
+            acc = S::default();
+            stats = associate(
+                reference,
+                current,
+                pose,
+                &PassGate {
+                    dynamic_threshold_m2: None,
+                    ..gate
+                },
+                cfg,
+                &mut acc,
+            );
+        }
+        if first {
+            rejected_dynamic = stats.rejected_dynamic;
+        }
+        iterations += 1;
+        if stats.inliers < needed {
+            return Err(MatchError::TooFewCorrespondences {
+                found: stats.inliers,
+                needed,
+            });
+        }
+        sigma = stats.robust_sigma.max(MIN_SIGMA_M);
+        let mut next = acc.solve(&stats, pose).ok_or(MatchError::Diverged)?;
+        degenerate = degenerate_direction(&stats, cfg.degenerate_ratio);
+        if let Some(v) = degenerate {
+            // Keep the unobserved component of the translation where the guess put it.
+            let d = next.translation() - pose.translation();
+            let along = v * d.dot(v);
+            next = Pose2::new(next.x - along.x, next.y - along.y, next.theta);
+        }
+        let (dt, dr) = guess.distance_to(next);
+        if !next.is_finite() || dt > cfg.max_correction_m || dr > cfg.max_correction_rad {
+            return Err(MatchError::Diverged);
+        }
+        let (step_t, step_r) = pose.distance_to(next);
+        pose = next;
+        last = stats;
+        if step_t < cfg.convergence_m && step_r < cfg.convergence_rad {
+            status = MatchStatus::Converged;
+            break;
+        }
+    }
+    Ok(report(
+        pose,
+        &last,
+        degenerate,
+        current.len(),
+        iterations,
+        rejected_dynamic,
+        status,
+    ))
+}
+
+/// The translation direction the pass's information does not pin down, if any.
+fn degenerate_direction(stats: &PassStats, ratio: f32) -> Option<Vec2> {
+    let (a, b, c) = stats.information.translation_schur();
+    let (hi, lo, v) = sym2_eigen(a, b, c);
+    (hi > 0.0 && lo < ratio * hi).then_some(v)
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn report(
+    motion: Pose2,
+    stats: &PassStats,
+    degenerate: Option<Vec2>,
+    points: usize,
+    iterations: u16,
+    rejected_dynamic: u16,
+    status: MatchStatus,
+) -> MatchResult {
+    let (a, b, c) = stats.information.translation_schur();
+    let (hi, lo, _) = sym2_eigen(a, b, c);
+    let conditioning = if hi > 0.0 { (lo / hi).max(0.0) } else { 0.0 };
+    let dof = (stats.weight_sum - 3.0).max(1.0);
+    let s2 = (stats.weighted_sq_sum / dof).max(MIN_SIGMA_M * MIN_SIGMA_M * 0.25);
+    let covariance = covariance(stats, degenerate, s2);
+    let inliers = stats.inliers;
+    MatchResult {
+        motion,
+        covariance,
+        quality: MatchQuality {
+            status,
+            iterations,
+            points: points as u16,
+            inliers,
+            inlier_ratio: if points > 0 {
+                inliers as f32 / points as f32
+            } else {
+                0.0
+            },
+            rms_residual_m: if inliers > 0 {
+                libm::sqrtf(stats.sq_sum / inliers as f32)
+            } else {
+                0.0
+            },
+            rejected_dynamic,
+            degenerate_direction: degenerate,
+            conditioning,
+        },
+    }
+}
+
+/// s² times the inverse information; along a degenerate direction, [`UNOBSERVED_VARIANCE`].
+fn covariance(stats: &PassStats, degenerate: Option<Vec2>, s2: f32) -> [[f32; 3]; 3] {
+    let h = stats.information;
+    match (degenerate, h.inverse()) {
+        (None, Some(inv)) => {
+            let m = inv.to_array();
+            core::array::from_fn(|i| core::array::from_fn(|j| s2 * m[i][j]))
+        }
+        _ => {
+            let (a, b, c) = h.translation_schur();
+            let (hi, _, v_lo) = sym2_eigen(a, b, c);
+            let v_hi = v_lo.perp();
+            let var_hi = if hi > 0.0 {
+                s2 / hi
+            } else {
+                UNOBSERVED_VARIANCE
+            };
+            let var_rot = if h.tt > 0.0 {
+                s2 / h.tt
+            } else {
+                UNOBSERVED_VARIANCE
+            };
+            let t = |i: usize, j: usize| {
+                let (vi, vj) = ([v_hi.x, v_hi.y][i] * var_hi, [v_hi.x, v_hi.y][j]);
+                let (ui, uj) = (
+                    [v_lo.x, v_lo.y][i] * UNOBSERVED_VARIANCE,
+                    [v_lo.x, v_lo.y][j],
+                );
+                vi * vj + ui * uj
+            };
+            [
+                [t(0, 0), t(0, 1), 0.0],
+                [t(1, 0), t(1, 1), 0.0],
+                [0.0, 0.0, var_rot],
+            ]
+        }
+    }
+}

@@ -1,0 +1,144 @@
+//! The few small dense solves the matchers need, in closed form (no allocation, no pivoting
+//! tables): 2x2 symmetric eigen-decomposition and a damped 3x3 symmetric solve.
+
+use crate::geom::Vec2;
+use libm::sqrtf;
+
+/// Eigen-decomposition of `[[a, b], [b, c]]`: `(lambda_max, lambda_min, unit eigenvector of lambda_min)`.
+pub fn sym2_eigen(a: f32, b: f32, c: f32) -> (f32, f32, Vec2) {
+    let mean = 0.5 * (a + c);
+    let half_diff = 0.5 * (a - c);
+    let radius = sqrtf(half_diff * half_diff + b * b);
+    let (hi, lo) = (mean + radius, mean - radius);
+    // Two algebraically equal candidates; the longer one is the numerically safe one.
+    let v1 = Vec2::new(b, lo - a);
+    let v2 = Vec2::new(lo - c, b);
+    let v = if v1.norm_squared() >= v2.norm_squared() {
+        v1
+    } else {
+        v2
+    };
+    let n = v.norm();
+    let dir = if n > 0.0 {
+        v * (1.0 / n)
+    } else if a <= c {
+        Vec2::new(1.0, 0.0)
+    } else {
+        Vec2::new(0.0, 1.0)
+    };
+    (hi, lo, dir)
+}
+
+/// A symmetric 3x3 matrix stored by its upper triangle.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sym3 {
+    pub xx: f32,
+    pub xy: f32,
+    pub xt: f32,
+    pub yy: f32,
+    pub yt: f32,
+    pub tt: f32,
+}
+
+impl Sym3 {
+    /// Adds `w * j jᵀ`.
+    pub fn add_outer(&mut self, j: [f32; 3], w: f32) {
+        self.xx += w * j[0] * j[0];
+        self.xy += w * j[0] * j[1];
+        self.xt += w * j[0] * j[2];
+        self.yy += w * j[1] * j[1];
+        self.yt += w * j[1] * j[2];
+        self.tt += w * j[2] * j[2];
+    }
+
+    pub fn to_array(self) -> [[f32; 3]; 3] {
+        [
+            [self.xx, self.xy, self.xt],
+            [self.xy, self.yy, self.yt],
+            [self.xt, self.yt, self.tt],
+        ]
+    }
+
+    fn det(&self) -> f32 {
+        self.xx * (self.yy * self.tt - self.yt * self.yt)
+            - self.xy * (self.xy * self.tt - self.yt * self.xt)
+            + self.xt * (self.xy * self.yt - self.yy * self.xt)
+    }
+
+    /// The inverse by the adjugate, or `None` when (numerically) singular.
+    pub fn inverse(&self) -> Option<Sym3> {
+        let d = self.det();
+        let scale = self.xx.abs() + self.yy.abs() + self.tt.abs();
+        if !(d.is_finite() && d.abs() > 1e-12 * scale * scale * scale) {
+            return None;
+        }
+        let inv = 1.0 / d;
+        Some(Sym3 {
+            xx: (self.yy * self.tt - self.yt * self.yt) * inv,
+            xy: (self.xt * self.yt - self.xy * self.tt) * inv,
+            xt: (self.xy * self.yt - self.xt * self.yy) * inv,
+            yy: (self.xx * self.tt - self.xt * self.xt) * inv,
+            yt: (self.xt * self.xy - self.xx * self.yt) * inv,
+            tt: (self.xx * self.yy - self.xy * self.xy) * inv,
+        })
+    }
+
+    pub fn mul(&self, v: [f32; 3]) -> [f32; 3] {
+        [
+            self.xx * v[0] + self.xy * v[1] + self.xt * v[2],
+            self.xy * v[0] + self.yy * v[1] + self.yt * v[2],
+            self.xt * v[0] + self.yt * v[1] + self.tt * v[2],
+        ]
+    }
+
+    /// The translation block with rotation eliminated (Schur complement): how well x/y are
+    /// pinned down once the best rotation is allowed for.
+    pub fn translation_schur(&self) -> (f32, f32, f32) {
+        if self.tt <= 0.0 {
+            return (self.xx, self.xy, self.yy);
+        }
+        let k = 1.0 / self.tt;
+        (
+            self.xx - self.xt * self.xt * k,
+            self.xy - self.xt * self.yt * k,
+            self.yy - self.yt * self.yt * k,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn eigenvector_satisfies_its_equation(a in -10.0f32..10.0, b in -10.0f32..10.0, c in -10.0f32..10.0) {
+            let (hi, lo, v) = sym2_eigen(a, b, c);
+            prop_assert!(hi >= lo);
+            let av = Vec2::new(a * v.x + b * v.y, b * v.x + c * v.y);
+            let tol = 1e-3 * (1.0 + a.abs() + b.abs() + c.abs());
+            prop_assert!((av.x - lo * v.x).abs() < tol && (av.y - lo * v.y).abs() < tol);
+            prop_assert!((v.norm() - 1.0).abs() < 1e-4);
+        }
+
+        #[test]
+        fn inverse_times_matrix_is_identity(j in proptest::collection::vec((-3.0f32..3.0, -3.0f32..3.0, -3.0f32..3.0), 4..8)) {
+            let mut m = Sym3::default();
+            for (a, b, c) in j { m.add_outer([a, b, c], 1.0); }
+            m.xx += 0.5; m.yy += 0.5; m.tt += 0.5;
+            let inv = m.inverse().unwrap();
+            for e in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
+                let back = m.mul(inv.mul(e));
+                for k in 0..3 { prop_assert!((back[k] - e[k]).abs() < 2e-3, "{:?} {:?}", back, e); }
+            }
+        }
+    }
+
+    #[test]
+    fn singular_matrix_has_no_inverse() {
+        let mut m = Sym3::default();
+        m.add_outer([1.0, 0.0, 0.0], 1.0);
+        assert!(m.inverse().is_none());
+    }
+}

@@ -1,0 +1,282 @@
+//! A scan turned into what matching needs: Cartesian points of the valid beams in angular
+//! order, their bearings, and (for a reference) a local line normal per point.
+//!
+//! Bearings let a query point be projected into the reference's angular order, so a
+//! correspondence costs a few comparisons in a window instead of a search over the whole scan
+//! (O(N·w), never O(N²)).
+
+use super::fast_math::atan2_approx;
+use super::linalg::sym2_eigen;
+use crate::geom::Vec2;
+use crate::scan::Scan;
+use core::f32::consts::TAU;
+
+/// A point's local line, fitted to its angular neighbours.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LineFit {
+    /// Unit normal of the local line; zero when the point has too few close neighbours.
+    pub normal: Vec2,
+}
+
+impl LineFit {
+    pub fn is_valid(&self) -> bool {
+        self.normal.norm_squared() > 0.5
+    }
+}
+
+/// Why a scan cannot be used for matching.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PrepareError {
+    /// Beam angles must increase through the revolution (Plumbline's scan convention).
+    BeamsNotInAngularOrder { beam: usize },
+}
+
+#[derive(Clone, Debug)]
+pub struct PreparedScan<const N: usize> {
+    points: [Vec2; N],
+    /// Beam angle of each point, unwrapped so that it increases from `bearings[0]`.
+    bearings: [f32; N],
+    lines: [LineFit; N],
+    len: usize,
+    /// The beams go all the way round, so windows wrap from the last point to the first.
+    full_circle: bool,
+    has_lines: bool,
+}
+
+impl<const N: usize> Default for PreparedScan<N> {
+    fn default() -> Self {
+        Self {
+            points: [Vec2::ZERO; N],
+            bearings: [0.0; N],
+            lines: [LineFit::default(); N],
+            len: 0,
+            full_circle: false,
+            has_lines: false,
+        }
+    }
+}
+
+/// Neighbours on each side used for a point's line fit.
+const LINE_HALF_WINDOW: usize = 2;
+
+impl<const N: usize> PreparedScan<N> {
+    /// Fills from a scan: valid beams only, bearings unwrapped. Lines are fitted separately by
+    /// [`Self::fit_lines`] because only a reference needs them.
+    pub fn load(&mut self, scan: &Scan<N>) -> Result<(), PrepareError> {
+        self.len = 0;
+        self.has_lines = false;
+        let mut first = None;
+        let mut prev = f32::NEG_INFINITY;
+        for (i, beam) in scan.beams().iter().enumerate() {
+            if !(beam.valid && beam.range_m.is_finite() && beam.angle_rad.is_finite()) {
+                continue;
+            }
+            let a0 = *first.get_or_insert(beam.angle_rad);
+            let bearing = beam.angle_rad - a0;
+            if bearing < prev || bearing > TAU + 1e-3 {
+                return Err(PrepareError::BeamsNotInAngularOrder { beam: i });
+            }
+            prev = bearing;
+            self.points[self.len] = beam.point();
+            self.bearings[self.len] = beam.angle_rad;
+            self.len += 1;
+        }
+        let span = if self.len > 1 {
+            self.bearings[self.len - 1] - self.bearings[0]
+        } else {
+            0.0
+        };
+        // Within 3 beam steps of a full turn: treat as a closed ring.
+        self.full_circle = span + 3.0 * self.mean_step() >= TAU;
+        Ok(())
+    }
+
+    /// Fits a local line to every point from up to two neighbours each side that lie within
+    /// `max_neighbour_m`; points on clutter or alone get no line.
+    pub fn fit_lines(&mut self, max_neighbour_m: f32, max_flatness: f32) {
+        let max2 = max_neighbour_m * max_neighbour_m;
+        for i in 0..self.len {
+            let c = self.points[i];
+            let (mut n, mut sx, mut sy) = (1.0f32, 0.0f32, 0.0f32);
+            let (mut sxx, mut sxy, mut syy) = (0.0f32, 0.0f32, 0.0f32);
+            for k in 1..=LINE_HALF_WINDOW {
+                for j in [
+                    self.neighbour(i, -(k as isize)),
+                    self.neighbour(i, k as isize),
+                ]
+                .into_iter()
+                .flatten()
+                {
+                    let d = self.points[j] - c;
+                    if d.norm_squared() <= max2 {
+                        n += 1.0;
+                        sx += d.x;
+                        sy += d.y;
+                        sxx += d.x * d.x;
+                        sxy += d.x * d.y;
+                        syy += d.y * d.y;
+                    }
+                }
+            }
+            self.lines[i] = LineFit::default();
+            if n < 3.0 {
+                continue;
+            }
+            let (mx, my) = (sx / n, sy / n);
+            let (cxx, cxy, cyy) = (sxx / n - mx * mx, sxy / n - mx * my, syy / n - my * my);
+            let (hi, lo, normal) = sym2_eigen(cxx, cxy, cyy);
+            if hi > 0.0 && lo <= max_flatness * hi {
+                self.lines[i] = LineFit { normal };
+            }
+        }
+        self.has_lines = true;
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub fn points(&self) -> &[Vec2] {
+        &self.points[..self.len]
+    }
+
+    pub fn point(&self, i: usize) -> Vec2 {
+        self.points[i]
+    }
+
+    pub fn line(&self, i: usize) -> LineFit {
+        self.lines[i]
+    }
+
+    pub fn has_lines(&self) -> bool {
+        self.has_lines
+    }
+
+    /// The point `offset` places away in angular order, wrapping on a full circle.
+    pub fn neighbour(&self, i: usize, offset: isize) -> Option<usize> {
+        self.wrap(i as isize + offset)
+    }
+
+    /// Index `j` if it is in the scan, or its wrapped twin on a full circle.
+    fn wrap(&self, j: isize) -> Option<usize> {
+        if (0..self.len as isize).contains(&j) {
+            Some(j as usize)
+        } else if self.full_circle && self.len > 0 {
+            Some(j.rem_euclid(self.len as isize) as usize)
+        } else {
+            None
+        }
+    }
+
+    /// Index of the first point whose bearing is not below the bearing of `q`, searching from
+    /// `hint` (queries come in angular order, so this is usually a step or two). `None` when `q`
+    /// lies outside the field of view of a scan that is not a full circle.
+    pub fn project(&self, q: Vec2, hint: usize) -> Option<usize> {
+        if self.len == 0 {
+            return None;
+        }
+        let a0 = self.bearings[0];
+        let mut phi = atan2_approx(q.y, q.x);
+        // Bring the bearing into [a0, a0 + 2pi).
+        phi -= a0;
+        phi -= TAU * libm::floorf(phi / TAU);
+        phi += a0;
+        let b = &self.bearings[..self.len];
+        let mut k = hint.min(self.len);
+        while k < self.len && b[k] < phi {
+            k += 1;
+        }
+        while k > 0 && b[k - 1] >= phi {
+            k -= 1;
+        }
+        if !self.full_circle {
+            let margin = 2.0 * self.mean_step();
+            if phi < b[0] - margin || phi > b[self.len - 1] + margin {
+                return None;
+            }
+        }
+        Some(k)
+    }
+
+    fn mean_step(&self) -> f32 {
+        if self.len > 1 {
+            (self.bearings[self.len - 1] - self.bearings[0]) / (self.len - 1) as f32
+        } else {
+            0.0
+        }
+    }
+
+    /// The nearest point to `q` among `half_window` points either side of `k`, with its squared
+    /// distance.
+    pub fn nearest_in_window(&self, q: Vec2, k: usize, half_window: usize) -> Option<(usize, f32)> {
+        let mut best: Option<(usize, f32)> = None;
+        let lo = k as isize - half_window as isize;
+        let hi = k as isize + half_window as isize;
+        for j in lo..hi {
+            let Some(j) = self.wrap(j) else { continue };
+            let d2 = (self.points[j] - q).norm_squared();
+            if best.is_none_or(|(_, b)| d2 < b) {
+                best = Some((j, d2));
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scan::Beam;
+
+    fn wall_scan() -> Scan<64> {
+        // A wall at x = 2, seen from -60 to +60 degrees.
+        let mut s = Scan::new(0.0);
+        for i in 0..61 {
+            let a = (-60.0f32 + 2.0 * i as f32).to_radians();
+            s.push(Beam::new(a, 2.0 / libm::cosf(a))).unwrap();
+        }
+        s
+    }
+
+    #[test]
+    fn wall_points_get_the_wall_normal() {
+        let mut p: PreparedScan<64> = PreparedScan::default();
+        p.load(&wall_scan()).unwrap();
+        p.fit_lines(0.5, 0.05);
+        for i in 0..p.len() {
+            let n = p.line(i).normal;
+            assert!(n.x.abs() > 0.999, "point {i}: {n:?}");
+        }
+    }
+
+    #[test]
+    fn projection_finds_the_beam_with_the_same_bearing() {
+        let mut p: PreparedScan<64> = PreparedScan::default();
+        p.load(&wall_scan()).unwrap();
+        let q = Vec2::new(1.5, 1.5 * libm::tanf(11.0f32.to_radians()));
+        let k = p.project(q, 0);
+        // Bearing 11 degrees lies between beams at 10 (index 35) and 12 (index 36).
+        assert_eq!(k, Some(36));
+        assert_eq!(p.project(q, 60), Some(36));
+        // Behind the sensor: outside a 120-degree field of view.
+        assert_eq!(p.project(Vec2::new(-1.0, 0.1), 0), None);
+        let (j, _) = p.nearest_in_window(Vec2::new(2.0, 0.02), 30, 3).unwrap();
+        assert_eq!(j, 30);
+    }
+
+    #[test]
+    fn out_of_order_beams_are_refused() {
+        let mut s: Scan<4> = Scan::new(0.0);
+        s.push(Beam::new(0.5, 1.0)).unwrap();
+        s.push(Beam::new(0.1, 1.0)).unwrap();
+        let mut p: PreparedScan<4> = PreparedScan::default();
+        assert_eq!(
+            p.load(&s),
+            Err(PrepareError::BeamsNotInAngularOrder { beam: 1 })
+        );
+    }
+}
