@@ -12,4 +12,5 @@ pub mod msgs;
 pub mod scan;
 pub mod lidar;
 pub mod matching;
+pub mod estimate;
 pub mod control;

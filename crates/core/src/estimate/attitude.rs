@@ -1,0 +1,213 @@
+//! Roll and pitch from gyro and accelerometer: a complementary filter with gyro-bias estimation.
+//!
+//! The gyro is integrated for the fast part; the accelerometer's gravity direction pulls the tilt
+//! back slowly (proportional gain) and trims the gyro bias (integral gain), in the manner of
+//! Mahony's nonlinear complementary filter. A multirotor's accelerometer sees mostly thrust, not
+//! gravity, while it accelerates, so the pull is weighted down as the specific force departs from
+//! 1 g and the gain is kept low: the filter trusts the gyro over seconds, the accelerometer over
+//! tens of seconds. Heading is not estimated here: the EKF owns yaw, observed by scan matching.
+
+use crate::msgs::GRAVITY_M_S2;
+use nalgebra::{UnitQuaternion, Vector3};
+
+/// Gains of the tilt filter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AttitudeConfig {
+    /// Proportional pull toward the accelerometer's gravity direction (rad/s per rad of error).
+    pub kp_per_s: f32,
+    /// Integral gain of the gyro-bias estimate (rad/s^2 per rad of error).
+    pub ki_per_s2: f32,
+    /// Specific-force magnitude error (fraction of 1 g) at which the accelerometer is ignored.
+    pub accel_reject_fraction: f32,
+    /// Bound on the gyro-bias estimate (rad/s), so a long misleading accelerometer cannot run it off.
+    pub max_bias_rad_s: f32,
+}
+
+impl Default for AttitudeConfig {
+    fn default() -> Self {
+        Self {
+            kp_per_s: 0.5,
+            ki_per_s2: 0.05,
+            accel_reject_fraction: 0.25,
+            max_bias_rad_s: 0.1,
+        }
+    }
+}
+
+/// Why a sample was not used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AttitudeError {
+    NonFinite,
+    BadDt,
+}
+
+/// Tilt filter state: body-to-world rotation and gyro bias.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AttitudeFilter {
+    pub config: AttitudeConfig,
+    rotation: UnitQuaternion<f32>,
+    bias_rad_s: Vector3<f32>,
+    /// False until a sample near 1 g has set the initial tilt (the vehicle starts at rest).
+    initialised: bool,
+}
+
+impl AttitudeFilter {
+    pub fn new(config: AttitudeConfig) -> Self {
+        Self {
+            config,
+            rotation: UnitQuaternion::identity(),
+            bias_rad_s: Vector3::zeros(),
+            initialised: false,
+        }
+    }
+
+    /// Roll and pitch (ZYX Euler, FLU), radians.
+    pub fn roll_pitch(&self) -> (f32, f32) {
+        let (roll, pitch, _) = self.rotation.euler_angles();
+        (roll, pitch)
+    }
+
+    /// The gyro reading with the estimated bias removed (rad/s).
+    pub fn corrected_rate(&self, gyro_rad_s: [f32; 3]) -> [f32; 3] {
+        let w = Vector3::from(gyro_rad_s) - self.bias_rad_s;
+        [w.x, w.y, w.z]
+    }
+
+    /// One step with a gyro and accelerometer sample. Bad samples leave the state unchanged.
+    pub fn update(
+        &mut self,
+        gyro_rad_s: [f32; 3],
+        accel_m_s2: [f32; 3],
+        dt: f32,
+    ) -> Result<(), AttitudeError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(AttitudeError::BadDt);
+        }
+        let gyro = Vector3::from(gyro_rad_s);
+        let accel = Vector3::from(accel_m_s2);
+        if !(gyro.iter().all(|v| v.is_finite()) && accel.iter().all(|v| v.is_finite())) {
+            return Err(AttitudeError::NonFinite);
+        }
+        let c = &self.config;
+        let mut omega = gyro - self.bias_rad_s;
+        let norm = accel.norm();
+        let misfit = libm::fabsf(norm / GRAVITY_M_S2 - 1.0) / c.accel_reject_fraction;
+        let weight = (1.0 - misfit).max(0.0);
+        if weight > 0.0 && !self.initialised {
+            // First usable sample: take the tilt from gravity at once instead of converging to it.
+            let up = accel / norm;
+            let tilt = UnitQuaternion::rotation_between(&up, &Vector3::z());
+            self.rotation = tilt.unwrap_or_else(UnitQuaternion::identity);
+            self.initialised = true;
+            return Ok(());
+        }
+        if weight > 0.0 {
+            // Error between measured and predicted "up" in the body frame (Mahony's e).
+            let up_measured = accel / norm;
+            let up_predicted = self.rotation.inverse_transform_vector(&Vector3::z());
+            let error = up_measured.cross(&up_predicted) * weight;
+            let bias = self.bias_rad_s - error * (c.ki_per_s2 * dt);
+            self.bias_rad_s = bias.map(|b| b.clamp(-c.max_bias_rad_s, c.max_bias_rad_s));
+            omega += error * c.kp_per_s;
+        }
+        self.rotation *= UnitQuaternion::from_scaled_axis(omega * dt);
+        self.rotation.renormalize();
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use libm::{cosf, sinf};
+
+    /// Specific force of a vehicle at rest with the given roll and pitch (FLU, ZYX Euler).
+    fn resting_accel(roll: f32, pitch: f32) -> [f32; 3] {
+        let g = GRAVITY_M_S2;
+        [
+            -g * sinf(pitch),
+            g * cosf(pitch) * sinf(roll),
+            g * cosf(pitch) * cosf(roll),
+        ]
+    }
+
+    #[test]
+    fn converges_to_the_resting_tilt_from_level() {
+        let mut f = AttitudeFilter::new(AttitudeConfig::default());
+        f.update([0.0; 3], resting_accel(0.0, 0.0), 0.002).unwrap();
+        for _ in 0..20_000 {
+            f.update([0.0; 3], resting_accel(0.2, -0.1), 0.002).unwrap();
+        }
+        let (roll, pitch) = f.roll_pitch();
+        assert!(
+            (roll - 0.2).abs() < 2e-3 && (pitch + 0.1).abs() < 2e-3,
+            "{roll} {pitch}"
+        );
+    }
+
+    #[test]
+    fn follows_a_gyro_rotation_and_learns_a_constant_bias() {
+        let mut f = AttitudeFilter::new(AttitudeConfig::default());
+        let bias = [0.02, -0.015, 0.0];
+        // At rest, level, with a biased gyro: the bias is learned and the tilt stays near zero.
+        for _ in 0..100_000 {
+            f.update(bias, resting_accel(0.0, 0.0), 0.002).unwrap();
+        }
+        let w = f.corrected_rate(bias);
+        assert!(w[0].abs() < 1e-3 && w[1].abs() < 1e-3, "{w:?}");
+        // Now roll at 0.5 rad/s for 0.4 s with a matching accelerometer: roll reaches 0.2.
+        for k in 1..=200 {
+            let roll = 0.5 * 0.002 * k as f32;
+            f.update(
+                [0.5 + bias[0], bias[1], 0.0],
+                resting_accel(roll, 0.0),
+                0.002,
+            )
+            .unwrap();
+        }
+        let (roll, pitch) = f.roll_pitch();
+        assert!(
+            (roll - 0.2).abs() < 3e-3 && pitch.abs() < 3e-3,
+            "{roll} {pitch}"
+        );
+    }
+
+    #[test]
+    fn first_sample_sets_the_tilt() {
+        let mut f = AttitudeFilter::new(AttitudeConfig::default());
+        f.update([0.0; 3], resting_accel(0.1, 0.25), 0.002).unwrap();
+        let (roll, pitch) = f.roll_pitch();
+        assert!(
+            (roll - 0.1).abs() < 1e-4 && (pitch - 0.25).abs() < 1e-4,
+            "{roll} {pitch}"
+        );
+    }
+
+    #[test]
+    fn accelerating_flight_does_not_drag_the_tilt() {
+        let mut f = AttitudeFilter::new(AttitudeConfig::default());
+        f.update([0.0; 3], resting_accel(0.0, 0.0), 0.002).unwrap();
+        // 1.5 g of specific force (a hard climb): beyond the rejection band, gyro only.
+        for _ in 0..1000 {
+            f.update([0.0; 3], [3.0, 0.0, 1.5 * GRAVITY_M_S2], 0.002)
+                .unwrap();
+        }
+        let (roll, pitch) = f.roll_pitch();
+        assert_eq!((roll, pitch), (0.0, 0.0));
+    }
+
+    #[test]
+    fn bad_samples_are_refused() {
+        let mut f = AttitudeFilter::new(AttitudeConfig::default());
+        let before = f;
+        assert_eq!(
+            f.update([f32::NAN, 0.0, 0.0], [0.0, 0.0, 9.8], 0.002),
+            Err(AttitudeError::NonFinite)
+        );
+        assert_eq!(
+            f.update([0.0; 3], [0.0, 0.0, 9.8], -1.0),
+            Err(AttitudeError::BadDt)
+        );
+        assert_eq!(f, before);
+    }
+}

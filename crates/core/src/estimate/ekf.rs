@@ -1,0 +1,292 @@
+//! The navigation EKF: state layout, covariance, and the one gated update every measurement
+//! model goes through.
+//!
+//! State (world frame, f32): position (3), velocity (3), yaw, accelerometer bias (body, 3), gyro
+//! z bias, and a clone of (x, y, yaw) at the scan matcher's reference scan. The clone makes the
+//! matcher's *relative* pose change an ordinary measurement with correct correlations
+//! ("stochastic cloning"): the prediction is the current pose seen from the cloned one. Roll and
+//! pitch come from [`super::attitude`]; the biases kept are the ones that drift the hold point
+//! (horizontal accelerometer bias), the height (vertical accelerometer bias) and the heading
+//! (gyro z bias).
+
+use nalgebra::{SMatrix, SVector};
+
+/// Number of states.
+pub const N: usize = 14;
+/// Indices into the state vector.
+pub mod ix {
+    pub const POS: usize = 0;
+    pub const VEL: usize = 3;
+    pub const YAW: usize = 6;
+    pub const ACCEL_BIAS: usize = 7;
+    pub const GYRO_Z_BIAS: usize = 10;
+    /// Clone of x, y and yaw at the reference scan.
+    pub const CLONE: usize = 11;
+}
+
+pub type State = SVector<f32, N>;
+pub type Covariance = SMatrix<f32, N, N>;
+
+/// Noise, gating and validity settings of the EKF.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EkfConfig {
+    /// Initial one-sigma of position (m), velocity (m/s), yaw (rad).
+    pub initial_std: [f32; 3],
+    /// Initial one-sigma of accelerometer bias (m/s^2) and gyro z bias (rad/s).
+    pub initial_bias_std: [f32; 2],
+    /// Accelerometer white noise density (m/s^2/sqrt(Hz)), including what tilt-estimate error
+    /// adds to the horizontal specific force.
+    pub accel_noise_density: f32,
+    /// Gyro z white noise density (rad/s/sqrt(Hz)).
+    pub gyro_noise_density: f32,
+    /// Bias random walks: accelerometer (m/s^3/sqrt(Hz)) and gyro (rad/s^2/sqrt(Hz)).
+    pub accel_bias_walk: f32,
+    pub gyro_bias_walk: f32,
+    /// The covariance is propagated at most this often (s); the state every step. Keeps the
+    /// 14x14 products off the per-IMU-sample path.
+    pub covariance_period_s: f32,
+    /// Normalised innovation squared above which a measurement is rejected, for 1, 2 and 3
+    /// dimensions (chi-square 99.7 %).
+    pub gate_nis: [f32; 3],
+    /// The estimate is invalid once the horizontal position one-sigma exceeds this (m).
+    pub max_position_std_m: f32,
+}
+
+impl Default for EkfConfig {
+    fn default() -> Self {
+        Self {
+            initial_std: [0.05, 0.05, 0.05],
+            initial_bias_std: [0.3, 0.01],
+            accel_noise_density: 0.35,
+            gyro_noise_density: 0.005,
+            accel_bias_walk: 0.01,
+            gyro_bias_walk: 0.0005,
+            covariance_period_s: 0.01,
+            gate_nis: [8.81, 11.62, 14.16],
+            max_position_std_m: 1.0,
+        }
+    }
+}
+
+/// What became of one measurement.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    Accepted,
+    /// Failed the innovation gate; the state is unchanged.
+    Rejected,
+    /// Non-finite or ill-formed (bad covariance, singular innovation); the state is unchanged.
+    Invalid,
+}
+
+/// Per-measurement-model tallies, kept so faults are counted rather than silently dropped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    pub accepted: u32,
+    pub rejected: u32,
+    pub invalid: u32,
+    /// Rejections since the last acceptance.
+    pub consecutive_rejected: u32,
+}
+
+impl Counters {
+    pub fn record(&mut self, outcome: Outcome) {
+        match outcome {
+            Outcome::Accepted => {
+                self.accepted = self.accepted.saturating_add(1);
+                self.consecutive_rejected = 0;
+            }
+            Outcome::Rejected => {
+                self.rejected = self.rejected.saturating_add(1);
+                self.consecutive_rejected = self.consecutive_rejected.saturating_add(1);
+            }
+            Outcome::Invalid => self.invalid = self.invalid.saturating_add(1),
+        }
+    }
+}
+
+/// The filter: state, covariance and the covariance-propagation accumulator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ekf {
+    pub config: EkfConfig,
+    pub(super) x: State,
+    pub(super) p: Covariance,
+    /// Time the state has moved since the covariance last caught up (s).
+    pub(super) pending_dt: f32,
+    /// True once a reference pose has been cloned.
+    pub(super) has_reference: bool,
+}
+
+impl Ekf {
+    pub fn new(config: EkfConfig) -> Self {
+        let mut p = Covariance::zeros();
+        let [sp, sv, sy] = config.initial_std;
+        let [sa, sg] = config.initial_bias_std;
+        for i in 0..3 {
+            p[(ix::POS + i, ix::POS + i)] = sp * sp;
+            p[(ix::VEL + i, ix::VEL + i)] = sv * sv;
+            p[(ix::ACCEL_BIAS + i, ix::ACCEL_BIAS + i)] = sa * sa;
+        }
+        p[(ix::YAW, ix::YAW)] = sy * sy;
+        p[(ix::GYRO_Z_BIAS, ix::GYRO_Z_BIAS)] = sg * sg;
+        for i in 0..3 {
+            p[(ix::CLONE + i, ix::CLONE + i)] = 1.0;
+        }
+        Self {
+            config,
+            x: State::zeros(),
+            p,
+            pending_dt: 0.0,
+            has_reference: false,
+        }
+    }
+
+    /// The state vector (see [`ix`]).
+    pub fn state(&self) -> &State {
+        &self.x
+    }
+
+    /// The covariance matrix.
+    pub fn covariance(&self) -> &Covariance {
+        &self.p
+    }
+
+    /// Finite state and covariance, and a horizontal position one-sigma within bounds.
+    pub fn is_valid(&self) -> bool {
+        let finite = self.x.iter().all(|v| v.is_finite()) && self.p.iter().all(|v| v.is_finite());
+        let var_xy = self.p[(ix::POS, ix::POS)].max(self.p[(ix::POS + 1, ix::POS + 1)]);
+        let max = self.config.max_position_std_m;
+        finite && var_xy >= 0.0 && var_xy <= max * max
+    }
+
+    /// Makes the current (x, y, yaw) the reference pose of the scan matcher: the clone takes the
+    /// values and all the correlations of the live states.
+    pub fn clone_reference(&mut self) {
+        let live = [ix::POS, ix::POS + 1, ix::YAW];
+        for (k, &src) in live.iter().enumerate() {
+            self.x[ix::CLONE + k] = self.x[src];
+        }
+        for (k, &src) in live.iter().enumerate() {
+            let row = self.p.row(src).into_owned();
+            self.p.set_row(ix::CLONE + k, &row);
+        }
+        for (k, &src) in live.iter().enumerate() {
+            let col = self.p.column(src).into_owned();
+            self.p.set_column(ix::CLONE + k, &col);
+        }
+        self.has_reference = true;
+    }
+
+    /// The gated Kalman update shared by every measurement model: `residual = z - h(x)`,
+    /// Jacobian `h`, noise `r`. Joseph-form covariance update, so rounding in f32 keeps it
+    /// symmetric positive semi-definite.
+    pub fn update<const M: usize>(
+        &mut self,
+        residual: SVector<f32, M>,
+        h: SMatrix<f32, M, N>,
+        r: SMatrix<f32, M, M>,
+    ) -> Outcome {
+        if !(residual.iter().all(|v| v.is_finite())
+            && h.iter().all(|v| v.is_finite())
+            && r.iter().all(|v| v.is_finite()))
+        {
+            return Outcome::Invalid;
+        }
+        let pht = self.p * h.transpose();
+        let s = h * pht + r;
+        let Some(chol) = s.cholesky() else {
+            return Outcome::Invalid;
+        };
+        let nis = residual.dot(&chol.solve(&residual));
+        let gate = self.config.gate_nis[(M - 1).min(2)];
+        if !nis.is_finite() {
+            return Outcome::Invalid;
+        }
+        if nis > gate {
+            return Outcome::Rejected;
+        }
+        let k = pht * chol.inverse();
+        self.x += k * residual;
+        let ikh = Covariance::identity() - k * h;
+        self.p = ikh * self.p * ikh.transpose() + k * r * k.transpose();
+        self.p = (self.p + self.p.transpose()) * 0.5;
+        self.x[ix::YAW] = crate::geom::normalize_angle(self.x[ix::YAW]);
+        Outcome::Accepted
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn update_pulls_toward_the_measurement_by_the_variance_ratio() {
+        let mut f = Ekf::new(EkfConfig::default());
+        // Position x has variance 0.05^2; measure x = 0.1 with the same variance: halfway.
+        let mut h = SMatrix::<f32, 1, N>::zeros();
+        h[(0, ix::POS)] = 1.0;
+        let r = SMatrix::<f32, 1, 1>::new(0.0025);
+        let out = f.update(SVector::<f32, 1>::new(0.1), h, r);
+        assert_eq!(out, Outcome::Accepted);
+        assert!((f.state()[ix::POS] - 0.05).abs() < 1e-5);
+        assert!((f.covariance()[(ix::POS, ix::POS)] - 0.00125).abs() < 1e-6);
+    }
+
+    #[test]
+    fn gate_rejects_an_outlier_and_leaves_the_state_alone() {
+        let mut f = Ekf::new(EkfConfig::default());
+        let before = f;
+        let mut h = SMatrix::<f32, 1, N>::zeros();
+        h[(0, ix::POS)] = 1.0;
+        // 1 m off with 0.07 m innovation sigma: NIS ~ 200, far past the gate.
+        let out = f.update(
+            SVector::<f32, 1>::new(1.0),
+            h,
+            SMatrix::<f32, 1, 1>::new(0.0025),
+        );
+        assert_eq!(out, Outcome::Rejected);
+        assert_eq!(f, before);
+        let mut c = Counters::default();
+        c.record(out);
+        c.record(out);
+        assert_eq!((c.rejected, c.consecutive_rejected), (2, 2));
+        c.record(Outcome::Accepted);
+        assert_eq!((c.rejected, c.consecutive_rejected, c.accepted), (2, 0, 1));
+    }
+
+    #[test]
+    fn ill_formed_measurements_are_invalid() {
+        let mut f = Ekf::new(EkfConfig::default());
+        let mut h = SMatrix::<f32, 1, N>::zeros();
+        h[(0, ix::POS)] = 1.0;
+        let nan = f.update(
+            SVector::<f32, 1>::new(f32::NAN),
+            h,
+            SMatrix::<f32, 1, 1>::new(0.01),
+        );
+        assert_eq!(nan, Outcome::Invalid);
+        // Negative noise makes the innovation covariance indefinite.
+        let bad = f.update(
+            SVector::<f32, 1>::new(0.0),
+            h,
+            SMatrix::<f32, 1, 1>::new(-1.0),
+        );
+        assert_eq!(bad, Outcome::Invalid);
+        assert!(f.is_valid());
+    }
+
+    #[test]
+    fn clone_copies_values_and_correlations() {
+        let mut f = Ekf::new(EkfConfig::default());
+        f.x[ix::POS] = 1.5;
+        f.x[ix::YAW] = 0.3;
+        f.p[(ix::POS, ix::VEL)] = 1e-3;
+        f.p[(ix::VEL, ix::POS)] = 1e-3;
+        f.clone_reference();
+        assert_eq!(f.x[ix::CLONE], 1.5);
+        assert_eq!(f.x[ix::CLONE + 2], 0.3);
+        assert_eq!(f.p[(ix::CLONE, ix::VEL)], 1e-3);
+        assert_eq!(f.p[(ix::CLONE, ix::CLONE)], f.p[(ix::POS, ix::POS)]);
+        assert_eq!(f.p[(ix::CLONE, ix::POS)], f.p[(ix::POS, ix::POS)]);
+        assert_eq!(f.p, f.p.transpose());
+    }
+}

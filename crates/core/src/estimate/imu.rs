@@ -1,0 +1,218 @@
+//! IMU prediction: the accelerometer and gyro drive the EKF's motion model.
+//!
+//! Specific force, bias-corrected and rotated to the world with the tilt filter's roll and pitch
+//! and the EKF's yaw, plus gravity, is the acceleration; yaw advances with the Euler-rate form of
+//! the body rates. Process noise is white accelerometer and gyro noise plus bias random walks.
+
+use super::ekf::{ix, Covariance, Ekf};
+use crate::geom::normalize_angle;
+use crate::msgs::GRAVITY_M_S2;
+use libm::{cosf, sinf};
+use nalgebra::{Matrix3, Vector3};
+
+/// What the prediction needs besides the raw sample: the tilt (from the attitude filter) and the
+/// gyro x/y rates with their bias removed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImuStep {
+    pub accel_m_s2: [f32; 3],
+    /// Body rates, x and y bias-corrected by the tilt filter; z raw (the EKF owns its bias).
+    pub gyro_rad_s: [f32; 3],
+    pub roll_rad: f32,
+    pub pitch_rad: f32,
+}
+
+/// Why a prediction was skipped (the state is unchanged).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PredictError {
+    NonFinite,
+    BadDt,
+}
+
+/// ZYX Euler rotation, body FLU to world.
+fn rotation(roll: f32, pitch: f32, yaw: f32) -> Matrix3<f32> {
+    let (sr, cr) = (sinf(roll), cosf(roll));
+    let (sp, cp) = (sinf(pitch), cosf(pitch));
+    let (sy, cy) = (sinf(yaw), cosf(yaw));
+    Matrix3::new(
+        cy * cp,
+        cy * sp * sr - sy * cr,
+        cy * sp * cr + sy * sr,
+        sy * cp,
+        sy * sp * sr + cy * cr,
+        sy * sp * cr - cy * sr,
+        -sp,
+        cp * sr,
+        cp * cr,
+    )
+}
+
+impl Ekf {
+    /// Advances the state by `dt` with one IMU sample; the covariance catches up every
+    /// `covariance_period_s` using the Jacobian at the current state.
+    pub fn predict(&mut self, imu: &ImuStep, dt: f32) -> Result<(), PredictError> {
+        if !(dt.is_finite() && dt > 0.0 && dt < 1.0) {
+            return Err(PredictError::BadDt);
+        }
+        let finite = imu
+            .accel_m_s2
+            .iter()
+            .chain(imu.gyro_rad_s.iter())
+            .all(|v| v.is_finite())
+            && imu.roll_rad.is_finite()
+            && imu.pitch_rad.is_finite();
+        if !finite {
+            return Err(PredictError::NonFinite);
+        }
+        let yaw = self.x[ix::YAW];
+        let r = rotation(imu.roll_rad, imu.pitch_rad, yaw);
+        let bias = self.x.fixed_rows::<3>(ix::ACCEL_BIAS).into_owned();
+        let specific = Vector3::from(imu.accel_m_s2) - bias;
+        let world_specific = r * specific;
+        let accel = world_specific - Vector3::new(0.0, 0.0, GRAVITY_M_S2);
+        let v = self.x.fixed_rows::<3>(ix::VEL).into_owned();
+        let (sr, cr) = (sinf(imu.roll_rad), cosf(imu.roll_rad));
+        let cp = cosf(imu.pitch_rad).max(0.1);
+        let rate_z = imu.gyro_rad_s[2] - self.x[ix::GYRO_Z_BIAS];
+        let yaw_rate = (sr * imu.gyro_rad_s[1] + cr * rate_z) / cp;
+
+        let mut pos = self.x.fixed_rows_mut::<3>(ix::POS);
+        pos += v * dt + accel * (0.5 * dt * dt);
+        let mut vel = self.x.fixed_rows_mut::<3>(ix::VEL);
+        vel += accel * dt;
+        self.x[ix::YAW] = normalize_angle(yaw + yaw_rate * dt);
+
+        self.pending_dt += dt;
+        if self.pending_dt >= self.config.covariance_period_s {
+            let step = self.pending_dt;
+            self.pending_dt = 0.0;
+            self.propagate_covariance(&r, &world_specific, cr / cp, step);
+        }
+        Ok(())
+    }
+
+    /// `P = F P F^T + Q` over `dt`, with F the motion model's Jacobian. `yaw_gain` is
+    /// d(yaw rate)/d(gyro z) = cos(roll)/cos(pitch).
+    fn propagate_covariance(
+        &mut self,
+        r: &Matrix3<f32>,
+        world_specific: &Vector3<f32>,
+        yaw_gain: f32,
+        dt: f32,
+    ) {
+        let mut f = Covariance::identity();
+        for i in 0..3 {
+            f[(ix::POS + i, ix::VEL + i)] = dt;
+        }
+        // d(R f)/d(yaw) = (-(R f)_y, (R f)_x, 0).
+        f[(ix::VEL, ix::YAW)] = -world_specific.y * dt;
+        f[(ix::VEL + 1, ix::YAW)] = world_specific.x * dt;
+        for i in 0..3 {
+            for j in 0..3 {
+                f[(ix::VEL + i, ix::ACCEL_BIAS + j)] = -r[(i, j)] * dt;
+            }
+        }
+        f[(ix::YAW, ix::GYRO_Z_BIAS)] = -yaw_gain * dt;
+        self.p = f * self.p * f.transpose();
+
+        let c = &self.config;
+        let qa = c.accel_noise_density * c.accel_noise_density * dt;
+        let qg = c.gyro_noise_density * c.gyro_noise_density * dt;
+        let qba = c.accel_bias_walk * c.accel_bias_walk * dt;
+        let qbg = c.gyro_bias_walk * c.gyro_bias_walk * dt;
+        for i in 0..3 {
+            // White acceleration: velocity grows by qa, position by qa dt^2 / 3 (correlated).
+            self.p[(ix::VEL + i, ix::VEL + i)] += qa;
+            self.p[(ix::POS + i, ix::POS + i)] += qa * dt * dt / 3.0;
+            self.p[(ix::POS + i, ix::VEL + i)] += qa * dt / 2.0;
+            self.p[(ix::VEL + i, ix::POS + i)] += qa * dt / 2.0;
+            self.p[(ix::ACCEL_BIAS + i, ix::ACCEL_BIAS + i)] += qba;
+        }
+        self.p[(ix::YAW, ix::YAW)] += qg;
+        self.p[(ix::GYRO_Z_BIAS, ix::GYRO_Z_BIAS)] += qbg;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimate::ekf::EkfConfig;
+
+    fn hover_step() -> ImuStep {
+        ImuStep {
+            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
+            gyro_rad_s: [0.0; 3],
+            roll_rad: 0.0,
+            pitch_rad: 0.0,
+        }
+    }
+
+    #[test]
+    fn rotation_is_orthonormal_and_matches_the_tilt_convention() {
+        let r = rotation(0.3, -0.2, 1.0);
+        assert!((r * r.transpose() - Matrix3::identity()).norm() < 1e-5);
+        // Positive pitch tips body z toward world +x; positive roll tips it toward -y.
+        assert!(rotation(0.0, 0.2, 0.0)[(0, 2)] > 0.0);
+        assert!(rotation(0.2, 0.0, 0.0)[(1, 2)] < 0.0);
+    }
+
+    #[test]
+    fn hover_stays_put_and_uncertainty_grows() {
+        let mut f = Ekf::new(EkfConfig::default());
+        let p0 = f.covariance()[(ix::POS, ix::POS)];
+        for _ in 0..500 {
+            f.predict(&hover_step(), 0.002).unwrap();
+        }
+        assert!(f.state().fixed_rows::<6>(0).norm() < 1e-5);
+        assert!(f.covariance()[(ix::POS, ix::POS)] > p0);
+        assert!(f.covariance()[(ix::VEL, ix::VEL)] > 0.05 * 0.05);
+    }
+
+    #[test]
+    fn tilted_thrust_accelerates_the_right_way() {
+        let mut f = Ekf::new(EkfConfig::default());
+        let tilt: f32 = 0.1;
+        // Thrust that exactly holds height at this pitch: horizontal accel g tan(tilt), forward.
+        let step = ImuStep {
+            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2 / cosf(tilt)],
+            pitch_rad: tilt,
+            ..hover_step()
+        };
+        for _ in 0..500 {
+            f.predict(&step, 0.002).unwrap();
+        }
+        let v = f.state()[ix::VEL];
+        assert!((v - GRAVITY_M_S2 * libm::tanf(tilt)).abs() < 1e-3, "{v}");
+        assert!(f.state()[ix::VEL + 2].abs() < 1e-4);
+    }
+
+    #[test]
+    fn yaw_integrates_the_bias_corrected_rate() {
+        let mut f = Ekf::new(EkfConfig::default());
+        f.x[ix::GYRO_Z_BIAS] = 0.01;
+        let step = ImuStep {
+            gyro_rad_s: [0.0, 0.0, 0.51],
+            ..hover_step()
+        };
+        for _ in 0..1000 {
+            f.predict(&step, 0.001).unwrap();
+        }
+        assert!((f.state()[ix::YAW] - 0.5).abs() < 1e-4);
+    }
+
+    #[test]
+    fn bad_samples_are_refused() {
+        let mut f = Ekf::new(EkfConfig::default());
+        let before = f;
+        let nan = ImuStep {
+            roll_rad: f32::NAN,
+            ..hover_step()
+        };
+        assert_eq!(f.predict(&nan, 0.002), Err(PredictError::NonFinite));
+        assert_eq!(f.predict(&hover_step(), 0.0), Err(PredictError::BadDt));
+        assert_eq!(
+            f.predict(&hover_step(), f32::INFINITY),
+            Err(PredictError::BadDt)
+        );
+        assert_eq!(f, before);
+    }
+}

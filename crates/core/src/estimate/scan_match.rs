@@ -1,0 +1,210 @@
+//! Scan-match measurement: the matcher's pose change against the cloned reference pose.
+//!
+//! The prediction is the current (x, y, yaw) expressed in the frame of the clone:
+//! `h = (R(-yaw_c) (p - p_c), yaw - yaw_c)`. When the matcher reports a degenerate axis (a
+//! featureless corridor), only the translation across it and the rotation are used: the filter is
+//! told nothing along the axis, so that direction's variance keeps growing with the IMU
+//! prediction instead of being pinned by a made-up value.
+
+use super::ekf::{ix, Ekf, Outcome, N};
+use crate::geom::normalize_angle;
+use crate::msgs::{ScanMatchDelta, ScanMatchStatus};
+use libm::{cosf, sinf, sqrtf};
+use nalgebra::{Matrix2x3, Matrix3, SMatrix, Vector2, Vector3};
+
+impl Ekf {
+    /// Fuses one scan-matcher result. `ReferenceOnly` and `Failed` only move the reference when
+    /// the matcher says so; a failed match is reported as `Invalid` so it is counted.
+    pub fn fuse_scan_match(&mut self, m: &ScanMatchDelta) -> Outcome {
+        let outcome = match m.status {
+            ScanMatchStatus::Matched if self.has_reference => self.fuse_delta(m),
+            // A match against a reference this filter never saw cannot be used.
+            ScanMatchStatus::Matched | ScanMatchStatus::Failed => Outcome::Invalid,
+            ScanMatchStatus::ReferenceOnly => Outcome::Accepted,
+        };
+        if m.becomes_reference {
+            self.clone_reference();
+        }
+        outcome
+    }
+
+    fn fuse_delta(&mut self, m: &ScanMatchDelta) -> Outcome {
+        let c = Matrix3::from_fn(|i, j| m.covariance[i][j]);
+        let z = Vector3::new(m.dx_m, m.dy_m, m.dtheta_rad);
+        let well_formed = z.iter().all(|v| v.is_finite())
+            && c.iter().all(|v| v.is_finite())
+            && (0..3).all(|i| c[(i, i)] > 0.0);
+        if !well_formed {
+            return Outcome::Invalid;
+        }
+        let (px, py, yaw) = (self.x[ix::POS], self.x[ix::POS + 1], self.x[ix::YAW]);
+        let (cx, cy, cyaw) = (
+            self.x[ix::CLONE],
+            self.x[ix::CLONE + 1],
+            self.x[ix::CLONE + 2],
+        );
+        let (s, co) = (sinf(cyaw), cosf(cyaw));
+        let (dx, dy) = (px - cx, py - cy);
+        // R(-yaw_c) (p - p_c) and its derivative with respect to yaw_c.
+        let predicted = Vector2::new(co * dx + s * dy, -s * dx + co * dy);
+        let d_dyaw_c = Vector2::new(-s * dx + co * dy, -co * dx - s * dy);
+        let mut h = SMatrix::<f32, 3, N>::zeros();
+        h[(0, ix::POS)] = co;
+        h[(0, ix::POS + 1)] = s;
+        h[(1, ix::POS)] = -s;
+        h[(1, ix::POS + 1)] = co;
+        h[(0, ix::CLONE)] = -co;
+        h[(0, ix::CLONE + 1)] = -s;
+        h[(1, ix::CLONE)] = s;
+        h[(1, ix::CLONE + 1)] = -co;
+        h[(0, ix::CLONE + 2)] = d_dyaw_c.x;
+        h[(1, ix::CLONE + 2)] = d_dyaw_c.y;
+        h[(2, ix::YAW)] = 1.0;
+        h[(2, ix::CLONE + 2)] = -1.0;
+        let residual = Vector3::new(
+            z.x - predicted.x,
+            z.y - predicted.y,
+            normalize_angle(z.z - normalize_angle(yaw - cyaw)),
+        );
+
+        match m.degenerate_axis {
+            None => self.update(residual, h, c),
+            Some([ax, ay]) => {
+                let n = sqrtf(ax * ax + ay * ay);
+                if !(n.is_finite() && n > 1e-3) {
+                    return Outcome::Invalid;
+                }
+                // Keep the direction across the axis and the rotation: rows (n^T, 0), (0, 0, 1).
+                let across = Matrix2x3::new(-ay / n, ax / n, 0.0, 0.0, 0.0, 1.0);
+                self.update(
+                    across * residual,
+                    across * h,
+                    across * c * across.transpose(),
+                )
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimate::ekf::EkfConfig;
+    use crate::estimate::imu::ImuStep;
+    use crate::msgs::GRAVITY_M_S2;
+
+    fn matched(dx: f32, dy: f32, dth: f32, sigma: f32) -> ScanMatchDelta {
+        ScanMatchDelta {
+            t_s: 0.0,
+            status: ScanMatchStatus::Matched,
+            dx_m: dx,
+            dy_m: dy,
+            dtheta_rad: dth,
+            covariance: [
+                [sigma * sigma, 0.0, 0.0],
+                [0.0, sigma * sigma, 0.0],
+                [0.0, 0.0, 1e-4],
+            ],
+            degenerate_axis: None,
+            becomes_reference: true,
+        }
+    }
+
+    fn reference() -> ScanMatchDelta {
+        ScanMatchDelta {
+            status: ScanMatchStatus::ReferenceOnly,
+            ..matched(0.0, 0.0, 0.0, 0.01)
+        }
+    }
+
+    fn hover() -> ImuStep {
+        ImuStep {
+            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
+            gyro_rad_s: [0.0; 3],
+            roll_rad: 0.0,
+            pitch_rad: 0.0,
+        }
+    }
+
+    #[test]
+    fn prediction_is_the_pose_seen_from_the_reference() {
+        let mut f = Ekf::new(EkfConfig::default());
+        f.x[ix::YAW] = core::f32::consts::FRAC_PI_2;
+        f.clone_reference();
+        // Moved 0.1 m along world +y, i.e. straight ahead for a vehicle facing +y.
+        f.x[ix::POS + 1] = 0.1;
+        let m = ScanMatchDelta {
+            becomes_reference: false,
+            ..matched(0.1, 0.0, 0.0, 0.01)
+        };
+        let before = f.x;
+        assert_eq!(f.fuse_scan_match(&m), Outcome::Accepted);
+        // The measurement agrees with the prediction: nothing moves.
+        assert!((f.x - before).norm() < 1e-6);
+    }
+
+    #[test]
+    fn a_match_without_a_reference_or_a_failure_is_counted_invalid() {
+        let mut f = Ekf::new(EkfConfig::default());
+        assert_eq!(
+            f.fuse_scan_match(&matched(0.0, 0.0, 0.0, 0.01)),
+            Outcome::Invalid
+        );
+        let failed = ScanMatchDelta {
+            status: ScanMatchStatus::Failed,
+            ..matched(0.0, 0.0, 0.0, 0.01)
+        };
+        assert_eq!(f.fuse_scan_match(&failed), Outcome::Invalid);
+        let nan = ScanMatchDelta {
+            dx_m: f32::NAN,
+            ..matched(0.0, 0.0, 0.0, 0.01)
+        };
+        assert_eq!(f.fuse_scan_match(&nan), Outcome::Invalid);
+        assert!(f.is_valid());
+    }
+
+    #[test]
+    fn an_outlier_match_is_rejected() {
+        let mut f = Ekf::new(EkfConfig::default());
+        f.fuse_scan_match(&reference());
+        for _ in 0..100 {
+            f.predict(&hover(), 0.002).unwrap();
+        }
+        let before = f.x;
+        let out = f.fuse_scan_match(&ScanMatchDelta {
+            becomes_reference: false,
+            ..matched(1.0, 0.0, 0.0, 0.01)
+        });
+        assert_eq!(out, Outcome::Rejected);
+        assert_eq!(f.x, before);
+    }
+
+    #[test]
+    fn degenerate_axis_stays_unobserved_and_its_variance_grows() {
+        let mut f = Ekf::new(EkfConfig::default());
+        f.fuse_scan_match(&reference());
+        // Matched against one keyframe, so across the corridor the position is pinned.
+        let corridor = ScanMatchDelta {
+            degenerate_axis: Some([1.0, 0.0]),
+            becomes_reference: false,
+            ..matched(0.0, 0.0, 0.0, 0.01)
+        };
+        let mut var_x = [0.0f32; 2];
+        let mut var_y = [0.0f32; 2];
+        for round in 0..2 {
+            for _ in 0..50 {
+                for _ in 0..100 {
+                    f.predict(&hover(), 0.002).unwrap();
+                }
+                assert_eq!(f.fuse_scan_match(&corridor), Outcome::Accepted);
+            }
+            var_x[round] = f.covariance()[(ix::POS, ix::POS)];
+            var_y[round] = f.covariance()[(ix::POS + 1, ix::POS + 1)];
+        }
+        // Along the corridor: growing, and already far above the across-corridor variance.
+        assert!(var_x[1] > var_x[0] * 1.2, "{var_x:?}");
+        assert!(var_x[1] > 10.0 * var_y[1], "{var_x:?} {var_y:?}");
+        // Across it the variance is bounded by the matches: it does not grow like x does.
+        assert!(var_y[1] < var_y[0] * 1.2, "{var_y:?}");
+    }
+}
