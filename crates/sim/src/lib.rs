@@ -7,5 +7,6 @@ pub mod dynamics;
 pub mod math;
 pub mod rng;
 pub mod scene;
+pub mod sensors;
 pub mod vehicle;
 pub mod world;
