@@ -90,14 +90,32 @@ impl Default for CascadeConfig {
     }
 }
 
+/// What the guidance asks of the vertical channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Vertical {
+    /// Hold this world height (m) through the height loop.
+    Height(f32),
+    /// Fly this climb rate (m/s, up positive), bypassing the height loop: landing descends at
+    /// a rate, not to a height.
+    ClimbRate(f32),
+}
+
 /// What the guidance asks of the cascade.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CascadeSetpoint {
-    pub position_m: [f32; 3],
+    /// World (x, y) to hold (m); `None` flies level with no horizontal loops, for when the
+    /// horizontal estimate cannot be trusted (estimate-invalid landing).
+    pub horizontal_m: Option<[f32; 2]>,
+    pub vertical: Vertical,
     pub yaw_rad: f32,
-    /// When set, the height loop is bypassed and this climb rate (m/s, up positive) is flown
-    /// instead: landing descends at a rate, not to a height.
-    pub climb_rate_m_s: Option<f32>,
+}
+
+/// The position loops' output.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VelocitySetpoint {
+    /// World horizontal velocity (m/s); `None` means level flight.
+    pub horizontal_m_s: Option<[f32; 2]>,
+    pub climb_m_s: f32,
 }
 
 /// Attitude and collective asked of the inner loops.
@@ -182,30 +200,39 @@ impl Cascade {
         setpoint: &CascadeSetpoint,
         state: &EstimatedState,
         dt: f32,
-    ) -> Result<[f32; 3], PidError> {
-        let mut v = [0.0; 3];
-        for (axis, out) in v.iter_mut().enumerate().take(2) {
-            let (sp, x) = (setpoint.position_m[axis], state.position_m[axis]);
-            *out = self.position[axis].update(sp, x, 0.0, dt, false)?;
-        }
-        v[2] = match setpoint.climb_rate_m_s {
-            Some(rate) if rate.is_finite() => rate,
-            Some(_) => return Err(PidError::NonFinite),
-            None => self.position[2].update(
-                setpoint.position_m[2],
-                state.position_m[2],
-                0.0,
-                dt,
-                false,
-            )?,
+    ) -> Result<VelocitySetpoint, PidError> {
+        let horizontal_m_s = match setpoint.horizontal_m {
+            Some(target) => {
+                let mut v = [0.0; 2];
+                for (axis, out) in v.iter_mut().enumerate() {
+                    let x = state.position_m[axis];
+                    *out = self.position[axis].update(target[axis], x, 0.0, dt, false)?;
+                }
+                Some(v)
+            }
+            None => {
+                self.position[0].reset();
+                self.position[1].reset();
+                None
+            }
         };
-        Ok(v)
+        let climb_m_s = match setpoint.vertical {
+            Vertical::ClimbRate(rate) if rate.is_finite() => rate,
+            Vertical::ClimbRate(_) => return Err(PidError::NonFinite),
+            Vertical::Height(h) => {
+                self.position[2].update(h, state.position_m[2], 0.0, dt, false)?
+            }
+        };
+        Ok(VelocitySetpoint {
+            horizontal_m_s,
+            climb_m_s,
+        })
     }
 
     /// Velocity loop: acceleration demand turned into tilt and a tilt-compensated collective.
     pub fn attitude_target(
         &mut self,
-        velocity_sp: [f32; 3],
+        velocity_sp: VelocitySetpoint,
         yaw_sp: f32,
         state: &EstimatedState,
         dt: f32,
@@ -213,10 +240,21 @@ impl Cascade {
     ) -> Result<AttitudeTarget, PidError> {
         let c = &self.config;
         let mut accel = [0.0; 3];
-        for (axis, out) in accel.iter_mut().enumerate() {
-            let v = state.velocity_m_s[axis];
-            *out = self.velocity[axis].update(velocity_sp[axis], v, 0.0, dt, integrate)?;
+        match velocity_sp.horizontal_m_s {
+            Some(target) => {
+                for axis in 0..2 {
+                    let v = state.velocity_m_s[axis];
+                    accel[axis] =
+                        self.velocity[axis].update(target[axis], v, 0.0, dt, integrate)?;
+                }
+            }
+            None => {
+                self.velocity[0].reset();
+                self.velocity[1].reset();
+            }
         }
+        let vz = state.velocity_m_s[2];
+        accel[2] = self.velocity[2].update(velocity_sp.climb_m_s, vz, 0.0, dt, integrate)?;
         // Vertical: never ask for less than 30 % of gravity, so the vehicle stays upright.
         let lift = (GRAVITY_M_S2 + accel[2]).max(0.3 * GRAVITY_M_S2);
         // Horizontal demand rotated into the heading frame, bounded by the tilt limit.
@@ -295,11 +333,18 @@ mod tests {
         }
     }
 
-    fn hold(position_m: [f32; 3]) -> CascadeSetpoint {
+    fn hold(p: [f32; 3]) -> CascadeSetpoint {
         CascadeSetpoint {
-            position_m,
+            horizontal_m: Some([p[0], p[1]]),
+            vertical: Vertical::Height(p[2]),
             yaw_rad: 0.0,
-            climb_rate_m_s: None,
+        }
+    }
+
+    fn level(horizontal_m_s: [f32; 2], climb_m_s: f32) -> VelocitySetpoint {
+        VelocitySetpoint {
+            horizontal_m_s: Some(horizontal_m_s),
+            climb_m_s,
         }
     }
 
@@ -321,7 +366,7 @@ mod tests {
         let v = c
             .velocity_setpoint(&hold([0.5, 0.0, 1.0]), &s, 0.01)
             .unwrap();
-        assert!((v[0] - 0.5).abs() < 1e-6 && v[1] == 0.0 && v[2] == 0.0);
+        assert_eq!(v, level([0.5, 0.0], 0.0));
         let t = c.attitude_target(v, 0.0, &s, 0.01, true).unwrap();
         assert!(t.pitch_rad > 0.0 && t.roll_rad.abs() < 1e-6);
         // Heading 90 degrees: the world +x target is now to the vehicle's right.
@@ -330,7 +375,7 @@ mod tests {
             ..s
         };
         let t = Cascade::new(CascadeConfig::default())
-            .attitude_target([0.5, 0.0, 0.0], 0.0, &s_left, 0.01, true)
+            .attitude_target(level([0.5, 0.0], 0.0), 0.0, &s_left, 0.01, true)
             .unwrap();
         assert!(t.roll_rad > 0.0 && t.pitch_rad.abs() < 1e-5, "{t:?}");
     }
@@ -342,9 +387,9 @@ mod tests {
         let v = c
             .velocity_setpoint(&hold([100.0, -100.0, 1.0]), &s, 0.01)
             .unwrap();
-        assert!(v[0] <= 1.0 && v[1] >= -1.0);
+        assert_eq!(v, level([1.0, -1.0], 0.0));
         let t = c
-            .attitude_target([50.0, 50.0, 0.0], 0.0, &s, 0.01, true)
+            .attitude_target(level([50.0, 50.0], 0.0), 0.0, &s, 0.01, true)
             .unwrap();
         let tilt = libm::acosf(cosf(t.roll_rad) * cosf(t.pitch_rad));
         assert!(tilt <= 0.35 + 1e-3, "{tilt}");
@@ -358,21 +403,38 @@ mod tests {
             ..level_at([0.0; 3])
         };
         let t = c
-            .attitude_target([0.0; 3], 0.0, &tilted, 0.01, false)
+            .attitude_target(level([0.0; 2], 0.0), 0.0, &tilted, 0.01, false)
             .unwrap();
         assert!((t.collective - 0.5 / cosf(0.3)).abs() < 1e-5);
         let climb = CascadeSetpoint {
-            climb_rate_m_s: Some(0.5),
+            vertical: Vertical::ClimbRate(0.5),
             ..hold([0.0; 3])
         };
         let v = c
             .velocity_setpoint(&climb, &level_at([0.0; 3]), 0.01)
             .unwrap();
-        assert_eq!(v[2], 0.5);
+        assert_eq!(v.climb_m_s, 0.5);
         let t = c
             .attitude_target(v, 0.0, &level_at([0.0; 3]), 0.01, false)
             .unwrap();
         assert!(t.collective > 0.5);
+    }
+
+    #[test]
+    fn without_a_horizontal_setpoint_it_flies_level_whatever_the_drift() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let mut s = level_at([3.0, -2.0, 1.0]);
+        s.velocity_m_s = [0.5, 0.5, 0.0];
+        let sp = CascadeSetpoint {
+            horizontal_m: None,
+            vertical: Vertical::ClimbRate(-0.5),
+            yaw_rad: 0.0,
+        };
+        let v = c.velocity_setpoint(&sp, &s, 0.01).unwrap();
+        let t = c.attitude_target(v, 0.0, &s, 0.01, true).unwrap();
+        assert_eq!((t.roll_rad, t.pitch_rad), (0.0, 0.0));
+        // Descending from rest: less than hover collective.
+        assert!(t.collective < 0.5);
     }
 
     #[test]

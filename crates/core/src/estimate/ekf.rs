@@ -57,13 +57,13 @@ impl Default for EkfConfig {
         Self {
             initial_std: [0.05, 0.05, 0.05],
             initial_bias_std: [0.3, 0.01],
-            accel_noise_density: 0.35,
+            accel_noise_density: 0.15,
             gyro_noise_density: 0.005,
             accel_bias_walk: 0.01,
             gyro_bias_walk: 0.0005,
             covariance_period_s: 0.01,
             gate_nis: [8.81, 11.62, 14.16],
-            max_position_std_m: 1.0,
+            max_position_std_m: 1.5,
         }
     }
 }
