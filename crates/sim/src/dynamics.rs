@@ -130,6 +130,11 @@ impl Dynamics {
         core::array::from_fn(|i| self.moment_coeff * s.rotor_speed[i] * s.rotor_speed[i])
     }
 
+    /// dΩ_i/dt of the second motor stage, rad/s².
+    pub fn rotor_acceleration(&self, s: &BodyState, i: usize) -> f64 {
+        (self.max_speed * s.motor[i] - s.rotor_speed[i]) / self.rotor_tau
+    }
+
     /// Rotor inertia I_r, for the acceleration power of the rotors.
     pub fn rotor_inertia(&self) -> f64 {
         self.rotor_inertia
@@ -152,7 +157,7 @@ impl Dynamics {
         for (i, rotor) in self.rotors.iter().enumerate() {
             let cmd = f.command[i].clamp(0.0, 1.0);
             d.motor[i] = (cmd - s.motor[i]) / self.motor_tau;
-            d.rotor_speed[i] = (self.max_speed * s.motor[i] - s.rotor_speed[i]) / self.rotor_tau;
+            d.rotor_speed[i] = self.rotor_acceleration(s, i);
             let w2 = s.rotor_speed[i] * s.rotor_speed[i];
             let tau = self.thrust_coeff[i] * w2;
             thrust += tau;

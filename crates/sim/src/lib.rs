@@ -3,8 +3,12 @@
 #![forbid(unsafe_code)]
 
 pub mod battery;
+pub mod disturb;
 pub mod dynamics;
 pub mod math;
+pub mod pilot;
+pub mod plan;
+pub mod power;
 pub mod rng;
 pub mod scene;
 pub mod sensors;
