@@ -178,9 +178,9 @@ mod tests {
             [0.5, 0.0, 1.0, 5.0],
         ];
         let inv = invert4(m).unwrap();
-        for r in 0..4 {
+        for (r, row) in m.iter().enumerate() {
             for c in 0..4 {
-                let v: f64 = (0..4).map(|k| m[r][k] * inv[k][c]).sum();
+                let v: f64 = row.iter().zip(&inv).map(|(a, inv_row)| a * inv_row[c]).sum();
                 assert!((v - if r == c { 1.0 } else { 0.0 }).abs() < 1e-12);
             }
         }
