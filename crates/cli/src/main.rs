@@ -2,6 +2,10 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod lidar_cmd;
+mod eval_cmd;
+mod log_args;
+mod odometry_cmd;
 mod plot;
 mod report;
 
@@ -13,11 +17,22 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Scan-to-scan lidar odometry over a CARMEN log.
+    Odometry(odometry_cmd::OdometryArgs),
+    /// Score a trajectory against a relations file (Kuemmerle et al. 2009).
+    Eval(eval_cmd::EvalArgs),
+    /// Lidar devices: decode raw captures, record from a serial port, plot a revolution.
+    Lidar(lidar_cmd::LidarArgs),
+}
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result: report::CliResult = match cli.command {};
+    let result: report::CliResult = match cli.command {
+        Command::Odometry(args) => odometry_cmd::run(args),
+        Command::Eval(args) => eval_cmd::run(args),
+        Command::Lidar(args) => lidar_cmd::run(args),
+    };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -16,10 +16,75 @@ pub fn fonts_available() -> bool {
     static FONT: OnceLock<bool> = OnceLock::new();
     *FONT.get_or_init(|| {
         FONT_PATHS.iter().any(|path| {
-            let Ok(bytes) = std::fs::read(path) else { return false };
+            let Ok(bytes) = std::fs::read(path) else {
+                return false;
+            };
             let leaked: &'static [u8] = Box::leak(bytes.into_boxed_slice());
             plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, leaked)
                 .is_ok()
         })
     })
+}
+
+use plotters::prelude::*;
+use plumbline_io::carmen::LaserRecord;
+use plumbline_io::trajectory::TrajectoryPoint;
+
+/// Top view: every scan's points placed by its estimated pose (grey), the path on top (red).
+/// A good trajectory draws crisp walls; drift shows as doubled or smeared walls.
+pub fn plot_trajectory(
+    path: &std::path::Path,
+    scans: &[LaserRecord],
+    trajectory: &[TrajectoryPoint],
+) -> Result<(), Box<dyn std::error::Error>> {
+    // Enough points to show the walls without drawing millions of pixels on long logs.
+    let stride = (scans.len() / 800).max(1);
+    let mut cloud = Vec::new();
+    for (rec, tp) in scans.iter().zip(trajectory).step_by(stride) {
+        let p = tp.pose;
+        let (s, c) = p.theta_rad.sin_cos();
+        for (i, (&r, &ok)) in rec.ranges_m.iter().zip(&rec.valid).enumerate() {
+            if ok && r < 30.0 {
+                let a = (rec.start_angle_rad + rec.increment_rad * i as f32) as f64;
+                let (lx, ly) = (r as f64 * a.cos(), r as f64 * a.sin());
+                cloud.push((c * lx - s * ly + p.x_m, s * lx + c * ly + p.y_m));
+            }
+        }
+    }
+    let path_xy: Vec<(f64, f64)> = trajectory
+        .iter()
+        .map(|t| (t.pose.x_m, t.pose.y_m))
+        .collect();
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in cloud.iter().chain(&path_xy) {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    if x0 > x1 {
+        (x0, x1, y0, y1) = (-1.0, 1.0, -1.0, 1.0);
+    }
+    // Equal scale on both axes so rooms keep their shape.
+    let span = (x1 - x0).max(y1 - y0).max(1.0) * 1.05;
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let root = BitMapBackend::new(path, (1000, 1000)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let labels = fonts_available();
+    let mut builder = ChartBuilder::on(&root);
+    builder.margin(10);
+    if labels {
+        builder
+            .caption("trajectory over scan points (m)", ("sans-serif", 20))
+            .x_label_area_size(30)
+            .y_label_area_size(40);
+    }
+    let mut chart = builder.build_cartesian_2d(
+        cx - span / 2.0..cx + span / 2.0,
+        cy - span / 2.0..cy + span / 2.0,
+    )?;
+    if labels {
+        chart.configure_mesh().disable_mesh().draw()?;
+    }
+    chart.draw_series(cloud.iter().map(|&p| Pixel::new(p, RGBColor(90, 90, 90))))?;
+    chart.draw_series(LineSeries::new(path_xy, RED.stroke_width(2)))?;
+    root.present()?;
+    Ok(())
 }

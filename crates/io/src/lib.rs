@@ -6,5 +6,6 @@ pub mod carmen;
 pub mod eval;
 mod pose_math;
 pub mod relations;
+pub mod serial;
 mod text_table;
 pub mod trajectory;

@@ -32,7 +32,7 @@ pub fn read_relations(path: &Path) -> Result<Vec<Relation>, ReadError> {
 }
 
 /// Writes relations in the same layout, z, roll and pitch zero.
-pub fn write_relations<W: std::io::Write>(
+pub fn write_relations<W: std::io::Write + ?Sized>(
     w: &mut W,
     relations: &[Relation],
 ) -> std::io::Result<()> {

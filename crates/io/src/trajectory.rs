@@ -12,7 +12,7 @@ pub struct TrajectoryPoint {
     pub pose: OdomPose,
 }
 
-pub fn write_trajectory<W: std::io::Write>(
+pub fn write_trajectory<W: std::io::Write + ?Sized>(
     w: &mut W,
     points: &[TrajectoryPoint],
 ) -> std::io::Result<()> {

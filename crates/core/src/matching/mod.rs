@@ -11,11 +11,13 @@ mod fast_math;
 mod icl_paper;
 mod linalg;
 mod metrics;
+mod odometry;
 mod prepared;
 mod result;
 
 pub use config::{MatchConfig, MatcherKind};
 pub use icl_paper::closest_point_on_line;
+pub use odometry::{LidarOdometry, OdometryConfig, OdometryStep};
 pub use prepared::PreparedScan;
 pub use result::{MatchError, MatchQuality, MatchResult, MatchStatus, UNOBSERVED_VARIANCE};
 

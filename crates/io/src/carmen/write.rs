@@ -5,7 +5,11 @@ use super::LaserRecord;
 use std::io::{self, Write};
 
 /// Writes one `ROBOTLASER1` line (it stores the field of view, unlike `FLASER`).
-pub fn write_robotlaser1<W: Write>(w: &mut W, rec: &LaserRecord, hostname: &str) -> io::Result<()> {
+pub fn write_robotlaser1<W: Write + ?Sized>(
+    w: &mut W,
+    rec: &LaserRecord,
+    hostname: &str,
+) -> io::Result<()> {
     let n = rec.ranges_m.len();
     let fov = rec.increment_rad * n.saturating_sub(1) as f32;
     write!(

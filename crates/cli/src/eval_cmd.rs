@@ -1,0 +1,49 @@
+//! `plumbline eval TRAJ RELATIONS`: the relations metric (DESIGN.md §6).
+
+use crate::report::{print_summary, CliResult};
+use clap::Args;
+use plumbline_io::eval::{evaluate, DEFAULT_TIME_TOLERANCE_S};
+use plumbline_io::relations::read_relations;
+use plumbline_io::trajectory::read_trajectory;
+use serde_json::json;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct EvalArgs {
+    /// Trajectory, `timestamp x y theta` per line.
+    pub trajectory: PathBuf,
+    /// Relations, `t1 t2 x y z roll pitch yaw` per line.
+    pub relations: PathBuf,
+    /// Largest difference between a relation stamp and a trajectory stamp that still matches, s.
+    #[arg(long, default_value_t = DEFAULT_TIME_TOLERANCE_S)]
+    pub tolerance: f64,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: EvalArgs) -> CliResult {
+    let trajectory = read_trajectory(&args.trajectory)?;
+    let relations = read_relations(&args.relations)?;
+    let s = evaluate(&trajectory, &relations, args.tolerance);
+    if s.matched < s.relations {
+        eprintln!(
+            "plumbline: {} of {} relations have a timestamp that is not in the trajectory (within {} s); they are not scored",
+            s.relations - s.matched,
+            s.relations,
+            args.tolerance
+        );
+    }
+    let summary = json!({
+        "relations": s.relations,
+        "matched": s.matched,
+        "trans_mean_m": s.trans_mean_m,
+        "trans_std_m": s.trans_std_m,
+        "trans2_mean_m2": s.trans2_mean_m2,
+        "rot_mean_deg": s.rot_mean_deg,
+        "rot_std_deg": s.rot_std_deg,
+        "rot2_mean_deg2": s.rot2_mean_deg2,
+    });
+    print_summary(&summary, args.json);
+    Ok(())
+}

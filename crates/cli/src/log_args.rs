@@ -1,0 +1,56 @@
+//! Options shared by every subcommand that reads a CARMEN log.
+
+use crate::report::CliError;
+use clap::Args;
+use plumbline_io::carmen::{read_log, CarmenLog, FovRule, ReadOptions, FLASER_MAX_RANGE_M};
+use std::path::Path;
+
+#[derive(Args, Debug, Clone)]
+pub struct LogArgs {
+    /// Field of view of FLASER scans in degrees (FLASER does not store it). Default: the
+    /// benchmark convention, 180 degrees (180/181 beams at 1 degree, 360/361 at 0.5 degree).
+    #[arg(long, value_name = "DEG")]
+    pub fov_deg: Option<f32>,
+    /// FLASER readings at or above this are "no return" (SICK's 81.83/81.91 m sentinels).
+    #[arg(long, value_name = "M", default_value_t = FLASER_MAX_RANGE_M)]
+    pub max_range: f32,
+    /// Count and pass over malformed lines instead of stopping at the first one.
+    #[arg(long)]
+    pub skip_bad_lines: bool,
+}
+
+impl LogArgs {
+    pub fn read(&self, path: &Path) -> Result<CarmenLog, CliError> {
+        let fov = match self.fov_deg {
+            None => FovRule::Conventional,
+            Some(d) if d.is_finite() && d > 0.0 && d <= 360.0 => FovRule::Radians(d.to_radians()),
+            Some(d) => return Err(CliError(format!("--fov-deg must be in (0, 360], got {d}"))),
+        };
+        if !(self.max_range.is_finite() && self.max_range > 0.0) {
+            return Err(CliError(format!(
+                "--max-range must be positive, got {}",
+                self.max_range
+            )));
+        }
+        let opts = ReadOptions {
+            fov,
+            flaser_max_range_m: self.max_range,
+            skip_bad_lines: self.skip_bad_lines,
+        };
+        let log = read_log(path, &opts)?;
+        if log.stats.bad_lines > 0 {
+            eprintln!(
+                "plumbline: passed over {} malformed line(s); first: {}",
+                log.stats.bad_lines,
+                log.stats.first_bad_line.as_deref().unwrap_or("?")
+            );
+        }
+        if log.scans.is_empty() {
+            return Err(CliError(format!(
+                "{}: no FLASER or ROBOTLASER1 scans in the log",
+                path.display()
+            )));
+        }
+        Ok(log)
+    }
+}

@@ -1,0 +1,161 @@
+//! `plumbline odometry LOG`: lidar-only scan-to-scan odometry over a log (DESIGN.md §4).
+
+use crate::log_args::LogArgs;
+use crate::plot::plot_trajectory;
+use crate::report::{print_summary, progress, CliError, CliResult};
+use clap::Args;
+use plumbline_core::matching::{
+    LidarOdometry, MatchConfig, MatcherKind, OdometryConfig, OdometryStep,
+};
+use plumbline_core::scan::Scan;
+use plumbline_io::carmen::OdomPose;
+use plumbline_io::trajectory::{write_trajectory, TrajectoryPoint};
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Largest scan the command takes (a UTM-30LX has 1081 beams).
+pub const MAX_BEAMS: usize = 2048;
+
+#[derive(Args, Debug)]
+pub struct OdometryArgs {
+    /// CARMEN log (FLASER or ROBOTLASER1 lines; .gz is fine).
+    pub log: PathBuf,
+    /// Scan matcher.
+    #[arg(long, default_value = "icl", value_parser = ["icl", "icl-paper", "icp", "plicp"])]
+    pub matcher: String,
+    /// Use the log's odometry as the initial guess (default: lidar only, constant velocity).
+    #[arg(long)]
+    pub odom_prior: bool,
+    /// Write the trajectory (`timestamp x y theta`) here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Draw the trajectory over the scan points into this PNG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// New keyframe after this much travel, m.
+    #[arg(long, default_value_t = OdometryConfig::default().keyframe_distance_m)]
+    pub keyframe_distance: f32,
+    /// New keyframe after this much turning, degrees.
+    #[arg(long, default_value_t = OdometryConfig::default().keyframe_angle_rad.to_degrees())]
+    pub keyframe_angle_deg: f32,
+    #[command(flatten)]
+    pub log_args: LogArgs,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: OdometryArgs) -> CliResult {
+    let kind = MatcherKind::from_name(&args.matcher)
+        .ok_or_else(|| CliError(format!("unknown matcher {}", args.matcher)))?;
+    let log = args.log_args.read(&args.log)?;
+    let config = OdometryConfig {
+        matcher: MatchConfig::with_kind(kind),
+        keyframe_distance_m: args.keyframe_distance,
+        keyframe_angle_rad: args.keyframe_angle_deg.to_radians(),
+        ..OdometryConfig::default()
+    };
+    let mut odometry: Box<LidarOdometry<MAX_BEAMS>> = Box::new(LidarOdometry::new(config));
+    let bar = progress(log.scans.len() as u64, "odometry");
+    let mut times_us = Vec::with_capacity(log.scans.len());
+    let mut trajectory = Vec::with_capacity(log.scans.len());
+    let (mut failed, mut keyframes, mut degenerate, mut rejected) = (0usize, 0usize, 0usize, 0u64);
+    let mut first_failure: Option<String> = None;
+    let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
+    let mut previous_odom: Option<OdomPose> = None;
+    for (i, rec) in log.scans.iter().enumerate() {
+        *scan = rec.to_scan().map_err(|_| {
+            CliError(format!(
+                "{}: scan {} has {} beams; at most {MAX_BEAMS} are supported",
+                args.log.display(),
+                i + 1,
+                rec.beam_count()
+            ))
+        })?;
+        let prior = match (args.odom_prior, previous_odom, rec.odom) {
+            (true, Some(a), Some(b)) => Some(a.between(b).to_f32()),
+            _ => None,
+        };
+        previous_odom = rec.odom;
+        let start = Instant::now();
+        let step = odometry.update(&scan, prior);
+        let elapsed = start.elapsed();
+        match step {
+            OdometryStep::Started => keyframes += 1,
+            OdometryStep::Matched {
+                result,
+                new_keyframe,
+            } => {
+                times_us.push(elapsed.as_secs_f64() * 1e6);
+                keyframes += new_keyframe as usize;
+                degenerate += result.quality.degenerate_direction.is_some() as usize;
+                rejected += result.quality.rejected_dynamic as u64;
+            }
+            OdometryStep::Predicted { error } => {
+                failed += 1;
+                first_failure.get_or_insert_with(|| {
+                    format!("scan {} at {}: {error}", i + 1, rec.timestamp_text)
+                });
+            }
+        }
+        trajectory.push(TrajectoryPoint {
+            timestamp_text: rec.timestamp_text.clone(),
+            timestamp_s: rec.timestamp_s,
+            pose: OdomPose::from_f32(odometry.pose()),
+        });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    if let Some(f) = &first_failure {
+        eprintln!(
+            "plumbline: {failed} match(es) failed and were bridged by prediction; first: {f}"
+        );
+    }
+    if let Some(path) = &args.out {
+        write_file(path, |w| write_trajectory(w, &trajectory))?;
+    }
+    if let Some(path) = &args.plot {
+        plot_trajectory(path, &log.scans, &trajectory)
+            .map_err(|e| CliError(format!("{}: {e}", path.display())))?;
+    }
+    times_us.sort_by(f64::total_cmp);
+    let summary = json!({
+        "scans": log.scans.len(),
+        "matcher": kind.name(),
+        "median_match_us": percentile(&times_us, 0.5),
+        "p99_match_us": percentile(&times_us, 0.99),
+        "failed_matches": failed,
+        "keyframes": keyframes,
+        "degenerate_matches": degenerate,
+        "rejected_points": rejected,
+        "odom_prior": args.odom_prior,
+        "non_monotonic_scans": log.stats.non_monotonic_scans,
+        "bad_lines": log.stats.bad_lines,
+    });
+    print_summary(&summary, args.json);
+    Ok(())
+}
+
+/// Nearest-rank percentile of sorted values; 0 for none.
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let k = ((sorted.len() as f64 * p).ceil() as usize).clamp(1, sorted.len()) - 1;
+    (sorted[k] * 100.0).round() / 100.0
+}
+
+/// Creates the file (and its directory) and writes it through a buffer, naming the path on error.
+pub fn write_file(
+    path: &std::path::Path,
+    body: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> CliResult {
+    let named = |e: std::io::Error| CliError(format!("{}: {e}", path.display()));
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(named)?;
+    }
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(named)?);
+    body(&mut w).map_err(named)?;
+    std::io::Write::flush(&mut w).map_err(named)
+}
