@@ -1,0 +1,79 @@
+//! `plumbline lidar record --device D --port PORT [--baud B] [--duration S] --out FILE`:
+//! raw bytes to FILE, decoded scans to a CARMEN log beside it (`FILE.log` unless `--log`).
+
+use super::{require_frames, summary_json};
+use crate::report::{print_summary, CliError, CliResult};
+use clap::Args;
+use plumbline_io::carmen::write_robotlaser1;
+use plumbline_io::serial::{record, Device, RecordOptions};
+use serde_json::Value;
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[derive(Args)]
+pub struct RecordArgs {
+    /// xv11 | xv11-old
+    #[arg(long)]
+    device: Device,
+    /// Serial port, e.g. /dev/ttyUSB0.
+    #[arg(long)]
+    port: String,
+    /// Line speed (default: the device's).
+    #[arg(long)]
+    baud: Option<u32>,
+    /// Seconds to record.
+    #[arg(long, default_value_t = 10.0)]
+    duration: f64,
+    /// Seconds of silence after which the port counts as dead.
+    #[arg(long, default_value_t = 2.0)]
+    idle_timeout: f64,
+    /// Raw capture out.
+    #[arg(long)]
+    out: PathBuf,
+    /// CARMEN log out (default: the capture's name plus `.log`).
+    #[arg(long)]
+    log: Option<PathBuf>,
+    #[arg(long)]
+    json: bool,
+}
+
+fn seconds(name: &str, s: f64) -> Result<Duration, CliError> {
+    Duration::try_from_secs_f64(s)
+        .map_err(|_| CliError(format!("--{name} {s}: not a duration in seconds")))
+}
+
+fn create(path: &PathBuf) -> Result<BufWriter<std::fs::File>, CliError> {
+    std::fs::File::create(path)
+        .map(BufWriter::new)
+        .map_err(|e| CliError(format!("{}: {e}", path.display())))
+}
+
+pub fn run(a: RecordArgs) -> CliResult {
+    let opts = RecordOptions {
+        device: a.device,
+        port: a.port.clone(),
+        baud: a.baud.unwrap_or(a.device.default_baud()),
+        duration: seconds("duration", a.duration)?,
+        idle_timeout: seconds("idle-timeout", a.idle_timeout)?,
+    };
+    let log_path = a.log.unwrap_or_else(|| {
+        let mut p = a.out.clone().into_os_string();
+        p.push(".log");
+        p.into()
+    });
+    let mut raw = create(&a.out)?;
+    let mut log = create(&log_path)?;
+    let summary = record(&opts, &mut raw, &mut |scan| {
+        write_robotlaser1(&mut log, &scan.record, "plumbline")
+    })?;
+    log.flush()
+        .map_err(|e| CliError(format!("{}: {e}", log_path.display())))?;
+    require_frames(&a.port, a.device, &summary)?;
+    let mut map = summary_json(a.device, &summary);
+    map.insert("port".into(), a.port.into());
+    map.insert("out".into(), a.out.display().to_string().into());
+    map.insert("log".into(), log_path.display().to_string().into());
+    print_summary(&Value::Object(map), a.json);
+    Ok(())
+}
