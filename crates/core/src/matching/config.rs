@@ -70,6 +70,14 @@ pub struct MatchConfig {
     /// A solution farther than this from the initial guess is reported as diverged.
     pub max_correction_m: f32,
     pub max_correction_rad: f32,
+    /// When a match fails or keeps fewer than `recovery_below_inlier_ratio` of its points, search
+    /// heading within +-`recovery_range_rad` in steps of `recovery_step_rad`, scoring points
+    /// within `recovery_radius_m` of a reference point, and match again from the best.
+    pub recovery: bool,
+    pub recovery_below_inlier_ratio: f32,
+    pub recovery_range_rad: f32,
+    pub recovery_step_rad: f32,
+    pub recovery_radius_m: f32,
     /// `icl-paper` only: learning rate times point count, and its fixed iteration count.
     pub paper_rate_per_point: f32,
     pub paper_iterations: u16,
@@ -95,6 +103,11 @@ impl Default for MatchConfig {
             dynamic_floor_m: 0.2,
             max_correction_m: 1.5,
             max_correction_rad: 0.8,
+            recovery: true,
+            recovery_below_inlier_ratio: 0.5,
+            recovery_range_rad: 0.9,
+            recovery_step_rad: 0.035,
+            recovery_radius_m: 0.15,
             paper_rate_per_point: 1.0,
             paper_iterations: 20,
         }

@@ -13,6 +13,7 @@ mod linalg;
 mod metrics;
 mod odometry;
 mod prepared;
+mod recovery;
 mod result;
 
 pub use config::{MatchConfig, MatcherKind};
@@ -100,7 +101,7 @@ impl<const N: usize> ScanMatcher<N> {
             });
         }
         let prev = self.previous_translation;
-        let result = match cfg.kind {
+        let attempt = |guess: Pose2| match cfg.kind {
             MatcherKind::Icl => {
                 driver::run::<PointToLineGaussNewton, N>(reference, current, guess, prev, cfg)
             }
@@ -120,6 +121,24 @@ impl<const N: usize> ScanMatcher<N> {
                 );
                 Self::paper_report(reference, current, motion, cfg)
             }
+        };
+        let first = attempt(guess);
+        let poor = match &first {
+            Ok(r) => r.quality.inlier_ratio < cfg.recovery_below_inlier_ratio,
+            Err(e) => matches!(
+                e,
+                MatchError::TooFewCorrespondences { .. } | MatchError::Diverged
+            ),
+        };
+        let result = if cfg.recovery && poor && cfg.kind != MatcherKind::IclPaper {
+            let second = attempt(recovery::best_heading(reference, current, guess, cfg));
+            match (&first, &second) {
+                (Ok(a), Ok(b)) if a.quality.inliers >= b.quality.inliers => first,
+                (_, Ok(_)) => second,
+                _ => first,
+            }
+        } else {
+            first
         }?;
         self.previous_translation = result.motion.translation();
         Ok(result)
