@@ -10,6 +10,7 @@ pub mod pilot;
 pub mod plan;
 pub mod power;
 pub mod rng;
+pub mod runner;
 pub mod scene;
 pub mod sensors;
 pub mod vehicle;

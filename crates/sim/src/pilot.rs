@@ -180,7 +180,11 @@ mod tests {
         let inv = invert4(m).unwrap();
         for (r, row) in m.iter().enumerate() {
             for c in 0..4 {
-                let v: f64 = row.iter().zip(&inv).map(|(a, inv_row)| a * inv_row[c]).sum();
+                let v: f64 = row
+                    .iter()
+                    .zip(&inv)
+                    .map(|(a, inv_row)| a * inv_row[c])
+                    .sum();
                 assert!((v - if r == c { 1.0 } else { 0.0 }).abs() < 1e-12);
             }
         }

@@ -206,6 +206,27 @@ impl Scene {
         }
     }
 
+    /// Distance from `p` (floor plane) to the nearest wall, capped at `cap_m`: only the grid
+    /// cells within the cap are searched, so the cost does not grow with the world.
+    pub fn clearance(&self, p: [f64; 2], cap_m: f64) -> f64 {
+        let cell = self.cell_m;
+        let span = |v: f64, o: f64, n: usize| {
+            let lo = (((v - cap_m - o) / cell).floor().max(0.0) as usize).min(n - 1);
+            let hi = (((v + cap_m - o) / cell).floor().max(0.0) as usize).min(n - 1);
+            lo..=hi
+        };
+        let mut best = cap_m;
+        for cy in span(p[1], self.origin[1], self.ny) {
+            for cx in span(p[0], self.origin[0], self.nx) {
+                let c = cy * self.nx + cx;
+                for &i in &self.items[self.starts[c] as usize..self.starts[c + 1] as usize] {
+                    best = best.min(self.walls[i as usize].distance(p));
+                }
+            }
+        }
+        best
+    }
+
     /// The walls this scene was built from.
     pub fn walls(&self) -> &[Segment] {
         &self.walls
@@ -370,6 +391,19 @@ mod tests {
             (over.range_m - 5.0).abs() < 1e-12,
             "a beam above the head reaches the wall"
         );
+    }
+
+    #[test]
+    fn clearance_is_the_distance_to_the_nearest_wall_capped() {
+        let (w, s) = room();
+        for p in [[1.0, 1.0], [3.0, 2.0], [5.9, 0.2], [0.3, 3.5]] {
+            let exact = w.clearance(p);
+            assert!((s.clearance(p, 10.0) - exact).abs() < 1e-12, "{p:?}");
+            assert!(
+                (s.clearance(p, 0.5) - exact.min(0.5)).abs() < 1e-12,
+                "{p:?}"
+            );
+        }
     }
 
     proptest! {

@@ -170,6 +170,12 @@ impl Lidar {
         &self.profile
     }
 
+    /// True when the first beam of a new revolution is due at `t_s` (the runner records the
+    /// true pose of the scan then).
+    pub fn revolution_due(&self, t_s: f64) -> bool {
+        self.next_beam == 0 && self.rev_start_s <= t_s
+    }
+
     /// Casts every beam due at or before `t_s` from `pose`; returns the revolution when its
     /// last beam has been taken. Call once per physics step.
     pub fn sample(
