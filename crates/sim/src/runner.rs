@@ -284,7 +284,7 @@ pub fn run(
             break;
         }
         // Slow processes: gusts, people, collision checks.
-        if k % slow_every == 0 {
+        if k.is_multiple_of(slow_every) {
             if let Some(g) = gusts.as_mut() {
                 g.advance(slow_every as f64 * dt);
             }
@@ -307,7 +307,7 @@ pub fn run(
             }
         }
         // Flight software at its own rate.
-        if k % control_every == 0 {
+        if k.is_multiple_of(control_every) {
             let cmd = match &mut pilot {
                 Pilot::Test(plan) => {
                     let r = plan.at(t);
@@ -424,7 +424,7 @@ pub fn run(
                 scan_buf.push(scan);
             }
         }
-        if k % state_every == 0 {
+        if k.is_multiple_of(state_every) {
             let (roll, pitch, yaw) = s.attitude.to_euler();
             recorder.state(&StateSample {
                 t_s: t,
