@@ -64,13 +64,24 @@ pub fn run(a: RecordArgs) -> CliResult {
     });
     let mut raw = create(&a.out)?;
     let mut log = create(&log_path)?;
-    let summary = record(&opts, &mut raw, &mut |scan| {
+    let recorded = record(&opts, &mut raw, &mut |scan| {
         write_robotlaser1(&mut log, &scan.record, "plumbline")
     })?;
     log.flush()
         .map_err(|e| CliError(format!("{}: {e}", log_path.display())))?;
-    require_frames(&a.port, a.device, &summary)?;
-    let mut map = summary_json(a.device, &summary);
+    let summary = &recorded.summary;
+    require_frames(&a.port, a.device, summary)?;
+    if recorded.stopped_by_silence {
+        eprintln!(
+            "plumbline: {}: stream stopped (silent for {} s); recording ended early",
+            a.port, a.idle_timeout
+        );
+    }
+    let mut map = summary_json(a.device, summary);
+    map.insert(
+        "stopped_by_silence".into(),
+        recorded.stopped_by_silence.into(),
+    );
     map.insert("port".into(), a.port.into());
     map.insert("out".into(), a.out.display().to_string().into());
     map.insert("log".into(), log_path.display().to_string().into());

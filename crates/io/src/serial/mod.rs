@@ -7,4 +7,4 @@ mod port;
 
 pub use capture::{decode_capture, DecodeSummary};
 pub use device::{DecodedScan, Device, DeviceDecoder};
-pub use port::{record, RecordError, RecordOptions};
+pub use port::{record, RecordError, RecordOptions, Recorded};

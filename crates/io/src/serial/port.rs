@@ -1,6 +1,7 @@
 //! Recording from a serial port: raw bytes to a file, decoded scans to a callback. Every wait
-//! is bounded: reads time out after `READ_TIMEOUT`, a port that stays silent for
-//! `idle_timeout` is an error, and the whole recording stops after `duration`.
+//! is bounded: reads time out after `READ_TIMEOUT`, the whole recording stops after `duration`,
+//! and a port silent for `idle_timeout` ends it early: an error when nothing came at all
+//! (wrong port, device off), a reported fault in [`Recorded`] when the stream stopped.
 
 use super::capture::DecodeSummary;
 use super::device::{DecodedScan, Device, DeviceDecoder};
@@ -15,8 +16,16 @@ pub struct RecordOptions {
     pub port: String,
     pub baud: u32,
     pub duration: Duration,
-    /// Silence longer than this ends the recording with [`RecordError::Silent`].
+    /// Silence longer than this ends the recording.
     pub idle_timeout: Duration,
+}
+
+/// A finished recording.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recorded {
+    pub summary: DecodeSummary,
+    /// True when the device went silent before `duration` was up (stream stopped, unplugged).
+    pub stopped_by_silence: bool,
 }
 
 #[derive(Debug)]
@@ -62,13 +71,13 @@ fn now_s() -> f64 {
         .map_or(0.0, |d| d.as_secs_f64())
 }
 
-/// Records until `duration` has passed. Each scan is stamped with the host clock at the time its
+/// Records until `duration` has passed or the port falls silent. Each scan is stamped with the host clock at the time its
 /// first byte arrived (estimated from the bytes read since, at the line's 10 bits a byte).
 pub fn record(
     opts: &RecordOptions,
     raw: &mut dyn Write,
     on_scan: &mut dyn FnMut(&DecodedScan) -> io::Result<()>,
-) -> Result<DecodeSummary, RecordError> {
+) -> Result<Recorded, RecordError> {
     let mut port = serialport::new(&opts.port, opts.baud)
         .timeout(READ_TIMEOUT)
         .open()
@@ -89,6 +98,7 @@ pub fn record(
         scans.push(scan);
         Ok(())
     };
+    let mut stopped_by_silence = false;
     while start.elapsed() < opts.duration {
         let n = match port.read(&mut buf) {
             Ok(n) => n,
@@ -107,10 +117,14 @@ pub fn record(
         };
         if n == 0 {
             if last_data.elapsed() >= opts.idle_timeout {
-                return Err(RecordError::Silent {
-                    port: opts.port.clone(),
-                    idle: opts.idle_timeout,
-                });
+                if total == 0 {
+                    return Err(RecordError::Silent {
+                        port: opts.port.clone(),
+                        idle: opts.idle_timeout,
+                    });
+                }
+                stopped_by_silence = true;
+                break;
             }
             continue;
         }
@@ -127,7 +141,10 @@ pub fn record(
         emit(scan, total, &mut scans)?;
     }
     raw.flush().map_err(RecordError::Write)?;
-    Ok(DecodeSummary::new(&scans, decoder.stats()))
+    Ok(Recorded {
+        summary: DecodeSummary::new(&scans, decoder.stats()),
+        stopped_by_silence,
+    })
 }
 
 #[cfg(test)]

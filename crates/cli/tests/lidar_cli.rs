@@ -1,0 +1,271 @@
+//! `plumbline lidar` end to end: the real XV-11 capture decoded to a CARMEN log and read back,
+//! bad input as clear errors, and recording through a virtual serial port pair (socat).
+
+use plumbline_io::carmen::{read_log, ReadOptions};
+use plumbline_io::serial::{decode_capture, Device};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_plumbline");
+const CAPTURES: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/data/captures/neato-xv11"
+);
+
+fn capture(name: &str) -> PathBuf {
+    Path::new(CAPTURES).join(name)
+}
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("plumbline-lidar-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+fn last_json(out: &Output) -> serde_json::Value {
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(stdout.lines().last().unwrap_or("")).unwrap()
+}
+
+#[test]
+fn decode_writes_a_carmen_log_that_reads_back() {
+    let dir = tmp_dir("decode");
+    let log = dir.join("hib.log");
+    let cap = capture("hand_in_box.bin");
+    let out = run(&[
+        "lidar",
+        "decode",
+        "--device",
+        "xv11",
+        cap.to_str().unwrap(),
+        "--out",
+        log.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s = last_json(&out);
+    assert_eq!(s["packets_ok"], 11451);
+    assert_eq!(s["bad_checksum"], 1);
+    assert_eq!(s["revolutions"], 161);
+    let rpm = s["rpm_median"].as_f64().unwrap();
+    assert!((290.0..300.0).contains(&rpm), "rpm_median {rpm}");
+    let back = read_log(&log, &ReadOptions::default()).unwrap();
+    assert_eq!(back.scans.len(), 161);
+    let invalid: u64 = back
+        .scans
+        .iter()
+        .map(|r| r.valid.iter().filter(|v| !**v).count() as u64)
+        .sum();
+    assert_eq!(serde_json::Value::from(invalid), s["invalid_beams"]);
+    // Stamped by byte position at 115200 baud (11520 bytes/s): revolution 60 is the one opened by
+    // packet 0 at byte 6 + 22 * (32 + 59 * 90).
+    assert_eq!(
+        back.scans[60].timestamp_text,
+        format!("{:.6}", (6 + 22 * (32 + 59 * 90)) as f64 / 11520.0)
+    );
+    assert!((back.scans[0].start_angle_rad + 179f32.to_radians()).abs() < 1e-5);
+}
+
+#[test]
+fn wrong_device_and_missing_file_are_clear_errors() {
+    let cap = capture("hand_in_box.bin");
+    let out = run(&[
+        "lidar",
+        "decode",
+        "--device",
+        "xv11-old",
+        cap.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("hand_in_box.bin: 252146 bytes but no valid xv11-old frame"),
+        "{err}"
+    );
+    let out = run(&[
+        "lidar",
+        "decode",
+        "--device",
+        "xv11",
+        "/no/such/capture.bin",
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/no/such/capture.bin"));
+    let out = run(&[
+        "lidar",
+        "record",
+        "--device",
+        "xv11",
+        "--port",
+        "/dev/plumbline-none",
+        "--out",
+        "/dev/null",
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/dev/plumbline-none: cannot open"));
+}
+
+#[test]
+fn plot_draws_a_png() {
+    let png = tmp_dir("plot").join("rev.png");
+    let cap = capture("hand_in_box.bin");
+    let out = run(&[
+        "lidar",
+        "plot",
+        "--device",
+        "xv11",
+        cap.to_str().unwrap(),
+        "--revolution",
+        "60",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    let out = run(&[
+        "lidar",
+        "plot",
+        "--device",
+        "xv11",
+        cap.to_str().unwrap(),
+        "--revolution",
+        "999",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("revolution 999 asked, 161 decoded"));
+}
+
+/// Starts `socat` joining two pseudo-terminals; `None` (with the reason) when it cannot run.
+fn socat_pair(dir: &Path) -> Result<(std::process::Child, PathBuf, PathBuf), String> {
+    let (a, b) = (dir.join("dev-a"), dir.join("dev-b"));
+    let child = Command::new("socat")
+        .arg(format!("pty,raw,echo=0,link={}", a.display()))
+        .arg(format!("pty,raw,echo=0,link={}", b.display()))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("socat not runnable ({e}); scripts/setup.sh installs it"))?;
+    let start = Instant::now();
+    while !(a.exists() && b.exists()) {
+        if start.elapsed() > Duration::from_secs(5) {
+            return Err("socat made no pty pair within 5 s".into());
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    Ok((child, a, b))
+}
+
+#[test]
+fn record_through_a_virtual_serial_port_equals_the_file_decode() {
+    let dir = tmp_dir("record");
+    let (mut socat, dev_a, dev_b) = match socat_pair(&dir) {
+        Ok(p) => p,
+        Err(reason) => {
+            println!("SKIPPED record_through_a_virtual_serial_port: {reason}");
+            return;
+        }
+    };
+    let raw = dir.join("rec.bin");
+    let rec = Command::new(BIN)
+        .args([
+            "lidar",
+            "record",
+            "--device",
+            "xv11",
+            "--port",
+            dev_b.to_str().unwrap(),
+        ])
+        .args([
+            "--duration",
+            "4",
+            "--idle-timeout",
+            "3",
+            "--json",
+            "--out",
+            raw.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    let bytes = std::fs::read(capture("hand_in_box.bin")).unwrap();
+    std::fs::write(&dev_a, &bytes).unwrap();
+    let out = rec.wait_with_output().unwrap();
+    let _ = socat.kill();
+    let _ = socat.wait();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read(&raw).unwrap(),
+        bytes,
+        "raw capture differs from what was sent"
+    );
+    let summary = last_json(&out);
+    assert_eq!(summary["packets_ok"], 11451);
+    // The capture is sent in well under a second; the silence after it ends the recording.
+    assert_eq!(summary["stopped_by_silence"], true);
+    let log = read_log(&dir.join("rec.bin.log"), &ReadOptions::default()).unwrap();
+    let (file_scans, _) = decode_capture(Device::Xv11, &bytes, 115_200);
+    assert_eq!(log.scans.len(), file_scans.len());
+    for (got, want) in log.scans.iter().zip(&file_scans) {
+        assert_eq!(got.valid, want.record.valid);
+        let close = got
+            .ranges_m
+            .iter()
+            .zip(&want.record.ranges_m)
+            .zip(&got.valid);
+        assert!(close
+            .filter(|(_, ok)| **ok)
+            .all(|((g, w), _)| (g - w).abs() < 5e-4));
+    }
+}
+
+#[test]
+fn a_silent_port_times_out_with_a_clear_error() {
+    let dir = tmp_dir("silent");
+    let (mut socat, _dev_a, dev_b) = match socat_pair(&dir) {
+        Ok(p) => p,
+        Err(reason) => {
+            println!("SKIPPED a_silent_port_times_out: {reason}");
+            return;
+        }
+    };
+    let start = Instant::now();
+    let out = run(&[
+        "lidar",
+        "record",
+        "--device",
+        "xv11",
+        "--port",
+        dev_b.to_str().unwrap(),
+        "--duration",
+        "10",
+        "--idle-timeout",
+        "0.5",
+        "--out",
+        dir.join("x.bin").to_str().unwrap(),
+    ]);
+    let _ = socat.kill();
+    let _ = socat.wait();
+    assert!(!out.status.success());
+    assert!(start.elapsed() < Duration::from_secs(5));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no data for 0.5 s"));
+}
