@@ -14,3 +14,4 @@ pub mod lidar;
 pub mod matching;
 pub mod estimate;
 pub mod control;
+pub mod flight;

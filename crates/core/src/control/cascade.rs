@@ -15,7 +15,9 @@ use crate::geom::normalize_angle;
 use crate::msgs::{EstimatedState, GRAVITY_M_S2};
 use libm::{atanf, cosf, sinf, sqrtf};
 
-/// Gains and limits of the whole cascade, for the nominal 1 kg, 0.17 m-arm X quadrotor.
+/// Gains and limits of the whole cascade. Defaults suit the simulator's "pelican" vehicle (1 kg,
+/// 0.21 m arms, 7 N rotors); for another vehicle set `effectiveness_rad_s2` and
+/// `hover_collective` from its parameters and the loop gains carry over.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CascadeConfig {
     /// Horizontal position error (m) -> velocity setpoint (m/s), per world axis.
@@ -30,10 +32,14 @@ pub struct CascadeConfig {
     pub attitude_rp: PidConfig,
     /// Heading error (rad) -> yaw rate setpoint (rad/s).
     pub attitude_yaw: PidConfig,
-    /// Roll or pitch rate error (rad/s) -> normalised deflection; `kp` is the SAS gain.
+    /// Roll or pitch rate error (rad/s) -> angular acceleration (rad/s^2); `kp` is the rate
+    /// damping of seed 002 eqs. 4-5 expressed per unit of angular acceleration.
     pub rate_rp: PidConfig,
-    /// Yaw rate error (rad/s) -> normalised deflection.
+    /// Yaw rate error (rad/s) -> angular acceleration (rad/s^2) (seed 002 eq. 6).
     pub rate_yaw: PidConfig,
+    /// Angular acceleration (rad/s^2) one unit of mixer deflection produces about body x, y, z:
+    /// rotor thrust x lever arm / inertia (yaw: rotor drag-torque ratio x thrust / inertia).
+    pub effectiveness_rad_s2: [f32; 3],
     /// Largest tilt the velocity loop may command (rad).
     pub max_tilt_rad: f32,
     /// Collective that holds the vehicle up when level (fraction of full thrust per motor).
@@ -43,14 +49,40 @@ pub struct CascadeConfig {
     pub max_collective: f32,
 }
 
+impl CascadeConfig {
+    /// The "soft" tuning of the energy comparison (seed 000 sec. 5.3: smoother control may spend
+    /// less energy): slower position and velocity loops, same inner loops.
+    pub fn soft() -> Self {
+        let d = Self::default();
+        Self {
+            position_xy: PidConfig {
+                kp: 1.0,
+                ..d.position_xy
+            },
+            velocity_xy: PidConfig {
+                kp: 3.0,
+                ki: 0.3,
+                ..d.velocity_xy
+            },
+            attitude_rp: PidConfig {
+                kp: 7.0,
+                ..d.attitude_rp
+            },
+            ..d
+        }
+    }
+}
+
 impl Default for CascadeConfig {
+    /// The "aggressive" tuning: found on the test vehicle (`flight::tests`), a 2 N push for 1 s
+    /// moves it about 0.2 m and it is back within 5 cm about 0.5 s after the push ends.
     fn default() -> Self {
         Self {
-            position_xy: PidConfig::p(1.0, 1.0),
+            position_xy: PidConfig::p(2.0, 1.0),
             position_z: PidConfig::p(1.5, 0.8),
             velocity_xy: PidConfig {
-                kp: 2.5,
-                ki: 0.6,
+                kp: 5.0,
+                ki: 0.5,
                 kd: 0.0,
                 integral_limit: 1.5,
                 output_limit: 4.0,
@@ -64,27 +96,29 @@ impl Default for CascadeConfig {
                 output_limit: 5.0,
                 derivative_tau_s: 0.0,
             },
-            attitude_rp: PidConfig::p(7.0, 4.0),
-            attitude_yaw: PidConfig::p(3.0, 1.5),
+            attitude_rp: PidConfig::p(10.0, 4.0),
+            attitude_yaw: PidConfig::p(2.5, 1.5),
             rate_rp: PidConfig {
-                kp: 0.08,
-                ki: 0.1,
-                kd: 0.001,
-                integral_limit: 0.05,
-                output_limit: 0.4,
+                kp: 40.0,
+                ki: 40.0,
+                kd: 0.4,
+                integral_limit: 20.0,
+                output_limit: 160.0,
                 derivative_tau_s: 0.01,
             },
             rate_yaw: PidConfig {
-                kp: 0.15,
-                ki: 0.1,
+                kp: 8.0,
+                ki: 4.0,
                 kd: 0.0,
-                integral_limit: 0.05,
-                output_limit: 0.2,
+                integral_limit: 2.0,
+                output_limit: 10.0,
                 derivative_tau_s: 0.0,
             },
+            // 4 rotors x 7 N x 0.21 m / sqrt(2) / 0.01 kg m^2; yaw 4 x 0.016 m x 7 N / 0.02.
+            effectiveness_rad_s2: [416.0, 416.0, 22.4],
             max_tilt_rad: 0.35,
-            hover_collective: 0.5,
-            min_collective: 0.08,
+            hover_collective: 0.35,
+            min_collective: 0.05,
             max_collective: 0.9,
         }
     }
@@ -310,7 +344,13 @@ impl Cascade {
     ) -> Result<Demand, PidError> {
         let mut d = [0.0; 3];
         for (axis, out) in d.iter_mut().enumerate() {
-            *out = self.rate[axis].update(rate_sp[axis], gyro_rad_s[axis], 0.0, dt, integrate)?;
+            let alpha =
+                self.rate[axis].update(rate_sp[axis], gyro_rad_s[axis], 0.0, dt, integrate)?;
+            let effectiveness = self.config.effectiveness_rad_s2[axis];
+            if !(effectiveness.is_finite() && effectiveness > 0.0) {
+                return Err(PidError::NonFinite);
+            }
+            *out = alpha / effectiveness;
         }
         Ok(Demand {
             collective: target.collective,
@@ -355,7 +395,7 @@ mod tests {
         let d = c
             .run(&hold([1.0, 2.0, 1.0]), &s, [0.0; 3], 0.002, true)
             .unwrap();
-        assert!((d.collective - 0.5).abs() < 1e-6);
+        assert!((d.collective - c.config.hover_collective).abs() < 1e-6);
         assert_eq!((d.roll, d.pitch, d.yaw), (0.0, 0.0, 0.0));
     }
 
@@ -364,7 +404,7 @@ mod tests {
         let mut c = Cascade::new(CascadeConfig::default());
         let s = level_at([0.0, 0.0, 1.0]);
         let v = c
-            .velocity_setpoint(&hold([0.5, 0.0, 1.0]), &s, 0.01)
+            .velocity_setpoint(&hold([0.25, 0.0, 1.0]), &s, 0.01)
             .unwrap();
         assert_eq!(v, level([0.5, 0.0], 0.0));
         let t = c.attitude_target(v, 0.0, &s, 0.01, true).unwrap();
@@ -405,7 +445,7 @@ mod tests {
         let t = c
             .attitude_target(level([0.0; 2], 0.0), 0.0, &tilted, 0.01, false)
             .unwrap();
-        assert!((t.collective - 0.5 / cosf(0.3)).abs() < 1e-5);
+        assert!((t.collective - c.config.hover_collective / cosf(0.3)).abs() < 1e-5);
         let climb = CascadeSetpoint {
             vertical: Vertical::ClimbRate(0.5),
             ..hold([0.0; 3])
@@ -417,7 +457,7 @@ mod tests {
         let t = c
             .attitude_target(v, 0.0, &level_at([0.0; 3]), 0.01, false)
             .unwrap();
-        assert!(t.collective > 0.5);
+        assert!(t.collective > c.config.hover_collective);
     }
 
     #[test]
@@ -434,7 +474,7 @@ mod tests {
         let t = c.attitude_target(v, 0.0, &s, 0.01, true).unwrap();
         assert_eq!((t.roll_rad, t.pitch_rad), (0.0, 0.0));
         // Descending from rest: less than hover collective.
-        assert!(t.collective < 0.5);
+        assert!(t.collective < c.config.hover_collective);
     }
 
     #[test]
@@ -458,7 +498,9 @@ mod tests {
         let config = CascadeConfig::default();
         let mut c = Cascade::new(config);
         let sas = super::super::sas::SasConfig {
-            gains_per_rad_s: [config.rate_rp.kp; 3],
+            gains_per_rad_s: core::array::from_fn(|i| {
+                config.rate_rp.kp / config.effectiveness_rad_s2[i]
+            }),
             stick_authority: [0.0; 3],
         };
         let gyro = [0.3, -0.2, 0.0];
@@ -491,14 +533,15 @@ mod tests {
         let dt = 0.002;
         for _ in 0..5000 {
             let d = c.run(&sp, &s, rates, dt, true).unwrap();
-            // Angular acceleration 2300 rad/s^2 per unit deflection (nominal vehicle).
-            rates[0] += 2300.0 * d.roll * dt;
-            rates[1] += 2300.0 * d.pitch * dt;
-            rates[2] += 400.0 * d.yaw * dt;
+            // The plant the configuration declares: effectiveness x deflection.
+            let e = c.config.effectiveness_rad_s2;
+            rates[0] += e[0] * d.roll * dt;
+            rates[1] += e[1] * d.pitch * dt;
+            rates[2] += e[2] * d.yaw * dt;
             s.roll_rad += rates[0] * dt;
             s.pitch_rad += rates[1] * dt;
             s.yaw_rad += rates[2] * dt;
-            let thrust = GRAVITY_M_S2 * d.collective / 0.5;
+            let thrust = GRAVITY_M_S2 * d.collective / c.config.hover_collective;
             let (cr, sr, cp, sp_) = (
                 cosf(s.roll_rad),
                 sinf(s.roll_rad),

@@ -20,12 +20,13 @@ pub struct SasConfig {
 }
 
 impl Default for SasConfig {
-    /// Gains for the nominal 1 kg, 0.17 m-arm vehicle: about 20 rad/s of damping bandwidth on
-    /// roll and pitch (each 0.1 of deflection gives ~230 rad/s^2), softer on yaw.
+    /// Gains for the simulator's "pelican" (a unit deflection gives about 416 rad/s^2 in roll
+    /// and pitch, 22 rad/s^2 in yaw): about 25 rad/s of damping bandwidth on roll and pitch and
+    /// 9 rad/s on yaw.
     fn default() -> Self {
         Self {
-            gains_per_rad_s: [0.08, 0.08, 0.15],
-            stick_authority: [0.25, 0.25, 0.2],
+            gains_per_rad_s: [0.06, 0.06, 0.4],
+            stick_authority: [0.1, 0.1, 0.4],
         }
     }
 }
@@ -86,7 +87,7 @@ mod tests {
         let (mut w, dt) = (2.0f32, 0.001);
         for _ in 0..1000 {
             let d = damp(&c, [0.0; 3], [w, 0.0, 0.0]);
-            w += 230.0 / 0.1 * d[0] * dt;
+            w += 416.0 * d[0] * dt;
         }
         assert!(w.abs() < 1e-3, "{w}");
     }

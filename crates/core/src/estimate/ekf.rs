@@ -50,6 +50,15 @@ pub struct EkfConfig {
     pub gate_nis: [f32; 3],
     /// The estimate is invalid once the horizontal position one-sigma exceeds this (m).
     pub max_position_std_m: f32,
+    /// After this many consecutive rejections of one sensor, the filter stops trusting its own
+    /// prediction of what that sensor sees: the measured states' variance is reset so the next
+    /// measurement is taken. Without this, a filter that has drifted (an unsensed touchdown
+    /// shock, a long lidar outage) would reject every correction forever.
+    pub reset_after_rejections: u32,
+    /// One-sigma given to reopened states: horizontal position (m; below
+    /// `max_position_std_m`, so a reopened estimate stays flyable), height (m), velocity (m/s)
+    /// and yaw (rad). Wide enough that the next measurement passes the gate.
+    pub reopen_std: [f32; 4],
 }
 
 impl Default for EkfConfig {
@@ -64,6 +73,8 @@ impl Default for EkfConfig {
             covariance_period_s: 0.01,
             gate_nis: [8.81, 11.62, 14.16],
             max_position_std_m: 1.5,
+            reset_after_rejections: 10,
+            reopen_std: [1.0, 5.0, 1.0, 0.3],
         }
     }
 }
@@ -86,6 +97,8 @@ pub struct Counters {
     pub invalid: u32,
     /// Rejections since the last acceptance.
     pub consecutive_rejected: u32,
+    /// Times the rejections ran so long that the filter reset the measured states' variance.
+    pub resets: u32,
 }
 
 impl Counters {
@@ -101,6 +114,18 @@ impl Counters {
             }
             Outcome::Invalid => self.invalid = self.invalid.saturating_add(1),
         }
+    }
+
+    /// Records an outcome; true when it completes a run of `limit` rejections, which the caller
+    /// answers by reopening the measured states (the run is then counted as a reset).
+    pub fn record_gated(&mut self, outcome: Outcome, limit: u32) -> bool {
+        self.record(outcome);
+        if self.consecutive_rejected < limit.max(1) {
+            return false;
+        }
+        self.consecutive_rejected = 0;
+        self.resets = self.resets.saturating_add(1);
+        true
     }
 }
 
@@ -156,6 +181,16 @@ impl Ekf {
         let var_xy = self.p[(ix::POS, ix::POS)].max(self.p[(ix::POS + 1, ix::POS + 1)]);
         let max = self.config.max_position_std_m;
         finite && var_xy >= 0.0 && var_xy <= max * max
+    }
+
+    /// Forgets what the filter knew about the given states: their correlations are cut and
+    /// their variances set, so the next measurement of them is believed.
+    pub fn reset_variance(&mut self, states: &[(usize, f32)]) {
+        for &(i, variance) in states {
+            self.p.row_mut(i).fill(0.0);
+            self.p.column_mut(i).fill(0.0);
+            self.p[(i, i)] = variance;
+        }
     }
 
     /// Makes the current (x, y, yaw) the reference pose of the scan matcher: the clone takes the
@@ -272,6 +307,17 @@ mod tests {
         );
         assert_eq!(bad, Outcome::Invalid);
         assert!(f.is_valid());
+    }
+
+    #[test]
+    fn reset_variance_cuts_correlations() {
+        let mut f = Ekf::new(EkfConfig::default());
+        f.p[(ix::POS + 2, ix::VEL + 2)] = 1e-3;
+        f.p[(ix::VEL + 2, ix::POS + 2)] = 1e-3;
+        f.reset_variance(&[(ix::POS + 2, 4.0)]);
+        assert_eq!(f.p[(ix::POS + 2, ix::POS + 2)], 4.0);
+        assert_eq!(f.p[(ix::POS + 2, ix::VEL + 2)], 0.0);
+        assert_eq!(f.p, f.p.transpose());
     }
 
     #[test]

@@ -86,18 +86,43 @@ impl Estimator {
         ok
     }
 
+    /// Fuses a scan-matcher result; after a run of rejections the horizontal pose and velocity
+    /// are reopened so the matcher can pull the filter back (a pose jump after an outage).
     pub fn fuse_scan_match(&mut self, m: &ScanMatchDelta) -> Outcome {
         let outcome = self.ekf.fuse_scan_match(m);
-        self.counters.scan_match.record(outcome);
+        let limit = self.config.ekf.reset_after_rejections;
+        if self.counters.scan_match.record_gated(outcome, limit) {
+            let [sp, _, sv, sy] = self.config.ekf.reopen_std;
+            self.ekf.reset_variance(&[
+                (ix::POS, sp * sp),
+                (ix::POS + 1, sp * sp),
+                (ix::VEL, sv * sv),
+                (ix::VEL + 1, sv * sv),
+                (ix::YAW, sy * sy),
+            ]);
+        }
         outcome
     }
 
+    /// Fuses a sonar range; after a run of rejections the height, climb rate and vertical
+    /// accelerometer bias are reopened and this range is used at once (a touchdown shock the
+    /// accelerometer did not report leaves the filter believing it still descends).
     pub fn fuse_sonar(&mut self, s: &SonarSample) -> Outcome {
         let (roll, pitch) = self.attitude.roll_pitch();
-        let outcome = self
-            .ekf
-            .fuse_sonar(&self.config.sonar, s.range_m, roll, pitch);
-        self.counters.sonar.record(outcome);
+        let sonar = self.config.sonar;
+        let mut outcome = self.ekf.fuse_sonar(&sonar, s.range_m, roll, pitch);
+        let limit = self.config.ekf.reset_after_rejections;
+        if self.counters.sonar.record_gated(outcome, limit) {
+            let [_, sh, sv, _] = self.config.ekf.reopen_std;
+            let bias_std = self.config.ekf.initial_bias_std[0];
+            self.ekf.reset_variance(&[
+                (ix::POS + 2, sh * sh),
+                (ix::VEL + 2, sv * sv),
+                (ix::ACCEL_BIAS + 2, bias_std * bias_std),
+            ]);
+            outcome = self.ekf.fuse_sonar(&sonar, s.range_m, roll, pitch);
+            self.counters.sonar.record(outcome);
+        }
         outcome
     }
 
@@ -248,6 +273,29 @@ mod tests {
         // Four degrees of freedom: a consistent filter averages 4 (95 % band over 20 runs about
         // 2.9..5.3); a wide band still catches an over- or under-confident filter.
         assert!((2.0..8.0).contains(&mean), "mean NEES {mean}");
+    }
+
+    #[test]
+    fn a_run_of_sonar_rejections_reopens_the_height() {
+        let mut est = Estimator::new(EstimatorConfig::default());
+        let level = ImuSample {
+            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
+            ..ImuSample::default()
+        };
+        // The filter thinks it is on the floor; the sonar insists on 1.5 m.
+        for k in 0..20 {
+            assert!(est.predict(&level, 0.002));
+            let outcome = est.fuse_sonar(&SonarSample {
+                t_s: 0.0,
+                range_m: 1.5,
+            });
+            if k < 9 {
+                assert_eq!(outcome, Outcome::Rejected);
+            }
+        }
+        let c = est.counters().sonar;
+        assert_eq!((c.rejected, c.resets), (10, 1));
+        assert!((est.state().position_m[2] - 1.5).abs() < 0.05);
     }
 
     #[test]

@@ -133,11 +133,12 @@ impl Ekf {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::estimate::ekf::EkfConfig;
 
-    fn hover_step() -> ImuStep {
+    /// A level vehicle at rest (or hovering): gravity on z, no rotation.
+    pub(crate) fn hover_step() -> ImuStep {
         ImuStep {
             accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
             gyro_rad_s: [0.0; 3],

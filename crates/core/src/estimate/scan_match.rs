@@ -90,8 +90,7 @@ impl Ekf {
 mod tests {
     use super::*;
     use crate::estimate::ekf::EkfConfig;
-    use crate::estimate::imu::ImuStep;
-    use crate::msgs::GRAVITY_M_S2;
+    use crate::estimate::imu::tests::hover_step;
 
     fn matched(dx: f32, dy: f32, dth: f32, sigma: f32) -> ScanMatchDelta {
         ScanMatchDelta {
@@ -114,15 +113,6 @@ mod tests {
         ScanMatchDelta {
             status: ScanMatchStatus::ReferenceOnly,
             ..matched(0.0, 0.0, 0.0, 0.01)
-        }
-    }
-
-    fn hover() -> ImuStep {
-        ImuStep {
-            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
-            gyro_rad_s: [0.0; 3],
-            roll_rad: 0.0,
-            pitch_rad: 0.0,
         }
     }
 
@@ -168,7 +158,7 @@ mod tests {
         let mut f = Ekf::new(EkfConfig::default());
         f.fuse_scan_match(&reference());
         for _ in 0..100 {
-            f.predict(&hover(), 0.002).unwrap();
+            f.predict(&hover_step(), 0.002).unwrap();
         }
         let before = f.x;
         let out = f.fuse_scan_match(&ScanMatchDelta {
@@ -194,7 +184,7 @@ mod tests {
         for round in 0..2 {
             for _ in 0..50 {
                 for _ in 0..100 {
-                    f.predict(&hover(), 0.002).unwrap();
+                    f.predict(&hover_step(), 0.002).unwrap();
                 }
                 assert_eq!(f.fuse_scan_match(&corridor), Outcome::Accepted);
             }

@@ -1,0 +1,325 @@
+//! The autopilot: owns the onboard state and runs one step of the loop (DESIGN.md §1).
+//!
+//! `step(inputs, dt) -> outputs` reads top to bottom in the order of the loop: sense, estimate,
+//! supervise, guide, control, mix. It never reads a clock, a file or a socket, so the simulator,
+//! the log replayer and the hardware runner drive exactly the same code. It never panics: a bad
+//! input is counted in [`FaultCounters`] and the step degrades (damped, level, or stopped) with
+//! finite motor commands.
+
+use super::events::EventLog;
+use super::supervisor::{Status, Supervisor, SupervisorConfig, EVENT_LOG_LEN};
+use crate::control::cascade::{Cascade, CascadeConfig, CascadeSetpoint, Vertical};
+use crate::control::mixer::{Demand, Mixer};
+use crate::control::sas::{self, SasConfig};
+use crate::estimate::ekf::Outcome;
+use crate::estimate::estimator::{Estimator, EstimatorConfig, EstimatorCounters};
+use crate::msgs::{
+    EstimatedState, FailsafeReason, FlightMode, FrameKind, Inputs, MotorCommands, Outputs,
+    PilotInput, PositionSetpoint, ScanMatchStatus,
+};
+
+/// Everything the autopilot can be configured with; defaults are for the nominal 1 kg,
+/// 0.17 m-arm X quadrotor with a 3S pack.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AutopilotConfig {
+    pub frame: FrameKind,
+    pub estimator: EstimatorConfig,
+    pub cascade: CascadeConfig,
+    pub sas: SasConfig,
+    pub supervisor: SupervisorConfig,
+    pub landing: LandingConfig,
+}
+
+/// Descent rates and the on-ground test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LandingConfig {
+    /// Normal descent (m/s).
+    pub descent_m_s: f32,
+    /// Descent when the battery is critical (m/s).
+    pub critical_descent_m_s: f32,
+    /// Below this estimated height (m) the vehicle counts as on the ground: integrators freeze,
+    /// since ground contact, not the controller, is holding it.
+    pub ground_height_m: f32,
+    /// Longest step accepted (s); longer or non-positive steps are faults.
+    pub max_dt_s: f32,
+}
+
+impl Default for LandingConfig {
+    fn default() -> Self {
+        Self {
+            descent_m_s: 0.5,
+            critical_descent_m_s: 1.0,
+            ground_height_m: 0.05,
+            max_dt_s: 0.1,
+        }
+    }
+}
+
+/// Faults the autopilot survived, by kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FaultCounters {
+    /// Steps with a non-finite, non-positive or too long `dt`.
+    pub bad_dt: u32,
+    /// Pilot stick values that were not finite (treated as centred / zero throttle).
+    pub bad_pilot: u32,
+    /// Battery readings that were not finite (ignored).
+    pub bad_battery: u32,
+    /// Steps where the cascade refused its inputs and rate damping alone flew.
+    pub control_errors: u32,
+    /// Steps where the mixer had to cut the request to fit the motors.
+    pub mixer_saturated: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Autopilot {
+    pub config: AutopilotConfig,
+    estimator: Estimator,
+    supervisor: Supervisor,
+    cascade: Cascade,
+    mixer: Mixer,
+    /// Hold point and heading: set at takeoff and when the pilot hands back control.
+    home: PositionSetpoint,
+    mode: FlightMode,
+    saturated: bool,
+    faults: FaultCounters,
+    last: Outputs,
+}
+
+impl Autopilot {
+    pub fn new(config: AutopilotConfig) -> Self {
+        Self {
+            config,
+            estimator: Estimator::new(config.estimator),
+            supervisor: Supervisor::new(config.supervisor),
+            cascade: Cascade::new(config.cascade),
+            mixer: Mixer::new(config.frame),
+            home: PositionSetpoint::default(),
+            mode: FlightMode::Disarmed,
+            saturated: false,
+            faults: FaultCounters::default(),
+            last: Outputs::default(),
+        }
+    }
+
+    pub fn faults(&self) -> &FaultCounters {
+        &self.faults
+    }
+
+    pub fn estimator_counters(&self) -> &EstimatorCounters {
+        self.estimator.counters()
+    }
+
+    pub fn events(&self) -> &EventLog<EVENT_LOG_LEN> {
+        self.supervisor.events()
+    }
+
+    /// One pass of the onboard loop.
+    pub fn step(&mut self, inputs: &Inputs, dt: f32) -> Outputs {
+        // ---- sense: sanitise what the vehicle handed us ----
+        let pilot = self.sanitise_pilot(inputs.pilot);
+        // SAFETY-CRITICAL: the kill switch stops the motors even when nothing else can run.
+        if !(dt.is_finite() && dt > 0.0 && dt <= self.config.landing.max_dt_s) {
+            self.faults.bad_dt = self.faults.bad_dt.saturating_add(1);
+            if pilot.kill {
+                self.last.motors = MotorCommands::STOPPED;
+                self.last.mode = FlightMode::Killed;
+            }
+            return self.last;
+        }
+        let battery_v = match inputs.battery.map(|b| b.voltage_v) {
+            Some(v) if !v.is_finite() => {
+                self.faults.bad_battery = self.faults.bad_battery.saturating_add(1);
+                None
+            }
+            other => other,
+        };
+
+        // ---- estimate: IMU prediction, then the measurements that arrived ----
+        self.estimator.predict(&inputs.imu, dt);
+        if let Some(sonar) = &inputs.sonar {
+            self.estimator.fuse_sonar(sonar);
+        }
+        let scan_accepted = inputs.scan_match.is_some_and(|m| {
+            let outcome = self.estimator.fuse_scan_match(&m);
+            m.status == ScanMatchStatus::Matched && outcome == Outcome::Accepted
+        });
+        let estimate = self.estimator.state();
+        let rates = self
+            .estimator
+            .body_rates(finite_or_zero(inputs.imu.gyro_rad_s));
+
+        // ---- supervise: modes and failsafes ----
+        let status = Status {
+            t_s: inputs.t_s,
+            pilot,
+            estimate,
+            scan_accepted,
+            battery_v,
+        };
+        let mode = self.supervisor.update(&status);
+        if mode != self.mode {
+            self.enter(mode, &estimate);
+        }
+        let failsafe = self.supervisor.failsafe();
+
+        // ---- guide: what this mode asks for ----
+        let setpoint = self.guide(mode, failsafe, &estimate);
+
+        // ---- control: cascade in the autonomous modes, rate damping in manual ----
+        let airborne = estimate.position_m[2] > self.config.landing.ground_height_m;
+        let demand = match (mode, setpoint) {
+            // SAFETY-CRITICAL: disarmed and killed mean motors stopped, nothing else.
+            (FlightMode::Disarmed | FlightMode::Killed, _) => None,
+            (FlightMode::Manual, _) => Some(self.manual(&pilot, rates)),
+            (_, Some(sp)) => {
+                let integrate = airborne && !self.saturated;
+                match self.cascade.run(&sp, &estimate, rates, dt, integrate) {
+                    Ok(d) => Some(d),
+                    Err(_) => {
+                        self.faults.control_errors = self.faults.control_errors.saturating_add(1);
+                        Some(self.damped_hover(rates))
+                    }
+                }
+            }
+            (_, None) => Some(self.damped_hover(rates)),
+        };
+
+        // ---- mix ----
+        let motors = match demand {
+            Some(d) => {
+                let mixed = self.mixer.mix(d);
+                self.saturated = mixed.saturated;
+                if mixed.saturated {
+                    self.faults.mixer_saturated = self.faults.mixer_saturated.saturating_add(1);
+                }
+                mixed.motors
+            }
+            None => MotorCommands::STOPPED,
+        };
+
+        self.last = Outputs {
+            motors,
+            mode,
+            failsafe,
+            estimate,
+            setpoint: setpoint.map(|sp| self.report(&sp, &estimate)),
+        };
+        self.last
+    }
+
+    /// Mode entry actions: capture the hold point, forget controller history.
+    fn enter(&mut self, mode: FlightMode, e: &EstimatedState) {
+        let here = PositionSetpoint {
+            position_m: e.position_m,
+            yaw_rad: e.yaw_rad,
+        };
+        match mode {
+            FlightMode::Takeoff | FlightMode::Hold => {
+                // Takeoff holds above where it left the ground; a hand-back holds where it is.
+                if mode == FlightMode::Takeoff || self.mode == FlightMode::Manual {
+                    self.home = here;
+                }
+                self.home.position_m[2] = self.config.supervisor.takeoff_height_m;
+            }
+            FlightMode::Disarmed | FlightMode::Killed => self.saturated = false,
+            FlightMode::Land | FlightMode::Manual => {}
+        }
+        self.cascade.reset();
+        self.mode = mode;
+    }
+
+    /// The cascade setpoint of each flying mode.
+    fn guide(
+        &self,
+        mode: FlightMode,
+        failsafe: Option<FailsafeReason>,
+        e: &EstimatedState,
+    ) -> Option<CascadeSetpoint> {
+        let hold_xy = [self.home.position_m[0], self.home.position_m[1]];
+        let yaw_rad = self.home.yaw_rad;
+        match mode {
+            FlightMode::Takeoff | FlightMode::Hold => Some(CascadeSetpoint {
+                horizontal_m: Some(hold_xy),
+                vertical: Vertical::Height(self.home.position_m[2]),
+                yaw_rad,
+            }),
+            FlightMode::Land => {
+                let c = &self.config.landing;
+                let rate = if failsafe == Some(FailsafeReason::BatteryCritical) {
+                    c.critical_descent_m_s
+                } else {
+                    c.descent_m_s
+                };
+                Some(CascadeSetpoint {
+                    // An untrustworthy horizontal estimate is not chased: land level.
+                    horizontal_m: e.valid.then_some(hold_xy),
+                    vertical: Vertical::ClimbRate(-rate),
+                    yaw_rad,
+                })
+            }
+            FlightMode::Disarmed | FlightMode::Killed | FlightMode::Manual => None,
+        }
+    }
+
+    /// Manual flight: sticks through the rate damper (seed 002 eqs. 4-6), throttle as collective.
+    fn manual(&self, pilot: &PilotInput, rates: [f32; 3]) -> Demand {
+        let sticks = [pilot.roll_norm, pilot.pitch_norm, pilot.yaw_norm];
+        let [roll, pitch, yaw] = sas::damp(&self.config.sas, sticks, rates);
+        Demand {
+            collective: pilot.throttle_norm.clamp(0.0, 1.0),
+            roll,
+            pitch,
+            yaw,
+        }
+    }
+
+    /// Fallback when the cascade cannot run: hover collective with rate damping, so the vehicle
+    /// does not tumble while the supervisor decides.
+    fn damped_hover(&self, rates: [f32; 3]) -> Demand {
+        let [roll, pitch, yaw] = sas::damp(&self.config.sas, [0.0; 3], rates);
+        Demand {
+            collective: self.config.cascade.hover_collective,
+            roll,
+            pitch,
+            yaw,
+        }
+    }
+
+    /// The position setpoint as logged: the hold point, or where a landing is heading.
+    fn report(&self, sp: &CascadeSetpoint, e: &EstimatedState) -> PositionSetpoint {
+        let [x, y] = sp
+            .horizontal_m
+            .unwrap_or([e.position_m[0], e.position_m[1]]);
+        let z = match sp.vertical {
+            Vertical::Height(h) => h,
+            Vertical::ClimbRate(_) => 0.0,
+        };
+        PositionSetpoint {
+            position_m: [x, y, z],
+            yaw_rad: sp.yaw_rad,
+        }
+    }
+
+    fn sanitise_pilot(&mut self, mut p: PilotInput) -> PilotInput {
+        let mut bad = false;
+        for v in [
+            &mut p.roll_norm,
+            &mut p.pitch_norm,
+            &mut p.yaw_norm,
+            &mut p.throttle_norm,
+        ] {
+            if !v.is_finite() {
+                *v = 0.0;
+                bad = true;
+            }
+        }
+        if bad {
+            self.faults.bad_pilot = self.faults.bad_pilot.saturating_add(1);
+        }
+        p
+    }
+}
+
+fn finite_or_zero(v: [f32; 3]) -> [f32; 3] {
+    v.map(|x| if x.is_finite() { x } else { 0.0 })
+}

@@ -1,0 +1,9 @@
+//! The flight software proper: modes, failsafes, the event log and the one step function.
+
+pub mod autopilot;
+pub mod events;
+pub mod supervisor;
+#[cfg(test)]
+mod test_vehicle;
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,464 @@
+//! Modes and failsafes: which mode the vehicle is in and why, decided from the pilot's switches,
+//! the estimate, the scan matcher's health and the battery.
+//!
+//! disarmed -> takeoff -> hold -> land -> disarmed, with manual (stick) flight reachable from any
+//! flying mode through the takeover switch and the kill switch overriding everything (seed 002
+//! sec. III). Failsafes only override the autonomous modes; a safety pilot in manual stays in
+//! charge. Every mode change and failsafe goes to the event log.
+
+use super::events::{EventKind, EventLog};
+use crate::msgs::{EstimatedState, FailsafeReason, FlightMode, PilotInput};
+
+/// Failsafe thresholds and mode-transition tolerances.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SupervisorConfig {
+    /// No accepted scan match for this long (s) raises "lidar lost"; holding continues on the IMU.
+    pub lidar_timeout_s: f32,
+    /// After "lidar lost", hold on the IMU this much longer (s), then land.
+    pub lidar_hold_s: f32,
+    /// Pack voltage below which the vehicle lands (V); default 3.5 V per cell of a 3S pack.
+    pub battery_low_v: f32,
+    /// Pack voltage below which it lands at once, faster (V); 3.3 V per cell.
+    pub battery_critical_v: f32,
+    /// A voltage must stay below a threshold this long (s) to count: load sags are brief.
+    pub battery_debounce_s: f32,
+    /// Hold height above the takeoff point (m) and how close counts as reached.
+    pub takeoff_height_m: f32,
+    pub takeoff_tolerance_m: f32,
+    /// Touchdown: below this height (m), slower than this (m/s), for this long (s).
+    pub touchdown_height_m: f32,
+    pub touchdown_speed_m_s: f32,
+    pub touchdown_s: f32,
+}
+
+impl Default for SupervisorConfig {
+    fn default() -> Self {
+        Self {
+            lidar_timeout_s: 1.0,
+            lidar_hold_s: 3.0,
+            battery_low_v: 10.5,
+            battery_critical_v: 9.9,
+            battery_debounce_s: 1.0,
+            takeoff_height_m: 1.0,
+            takeoff_tolerance_m: 0.05,
+            touchdown_height_m: 0.1,
+            touchdown_speed_m_s: 0.2,
+            touchdown_s: 0.5,
+        }
+    }
+}
+
+/// What the supervisor looks at each step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Status {
+    pub t_s: f64,
+    pub pilot: PilotInput,
+    pub estimate: EstimatedState,
+    /// A scan match was accepted by the estimator this step.
+    pub scan_accepted: bool,
+    /// A finite battery reading arrived this step.
+    pub battery_v: Option<f32>,
+}
+
+/// Capacity of the event log.
+pub const EVENT_LOG_LEN: usize = 32;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Supervisor {
+    pub config: SupervisorConfig,
+    mode: FlightMode,
+    failsafe: Option<FailsafeReason>,
+    /// The arm switch has been seen off since the last arming: arming needs an off-to-on edge,
+    /// so a vehicle powered up with the switch on does not take off by itself.
+    arm_seen_off: bool,
+    last_scan_t_s: f64,
+    low_since_t_s: Option<f64>,
+    critical_since_t_s: Option<f64>,
+    battery_low: bool,
+    battery_critical: bool,
+    touchdown_since_t_s: Option<f64>,
+    events: EventLog<EVENT_LOG_LEN>,
+}
+
+impl Supervisor {
+    pub fn new(config: SupervisorConfig) -> Self {
+        Self {
+            config,
+            mode: FlightMode::Disarmed,
+            failsafe: None,
+            arm_seen_off: false,
+            last_scan_t_s: 0.0,
+            low_since_t_s: None,
+            critical_since_t_s: None,
+            battery_low: false,
+            battery_critical: false,
+            touchdown_since_t_s: None,
+            events: EventLog::default(),
+        }
+    }
+
+    pub fn mode(&self) -> FlightMode {
+        self.mode
+    }
+
+    /// The most recent failsafe still in force.
+    pub fn failsafe(&self) -> Option<FailsafeReason> {
+        self.failsafe
+    }
+
+    pub fn events(&self) -> &EventLog<EVENT_LOG_LEN> {
+        &self.events
+    }
+
+    /// One decision. Returns the mode to fly this step.
+    pub fn update(&mut self, s: &Status) -> FlightMode {
+        // SAFETY-CRITICAL: the kill switch wins over every other input and every mode.
+        if s.pilot.kill {
+            if self.mode != FlightMode::Killed {
+                self.raise(s.t_s, FailsafeReason::KillSwitch);
+                self.set_mode(s.t_s, FlightMode::Killed);
+            }
+            return self.mode;
+        }
+        // SAFETY-CRITICAL: leaving "killed" needs the arm switch off, then a fresh arming.
+        if self.mode == FlightMode::Killed {
+            if s.pilot.arm {
+                return self.mode;
+            }
+            self.set_mode(s.t_s, FlightMode::Disarmed);
+        }
+        if !s.pilot.arm {
+            self.arm_seen_off = true;
+        }
+        if s.scan_accepted {
+            self.last_scan_t_s = s.t_s;
+        }
+        self.track_battery(s);
+
+        match self.mode {
+            FlightMode::Disarmed => self.maybe_arm(s),
+            FlightMode::Manual => {
+                if !s.pilot.arm {
+                    self.set_mode(s.t_s, FlightMode::Land);
+                } else if !s.pilot.manual {
+                    let next = if s.estimate.valid {
+                        FlightMode::Hold
+                    } else {
+                        FlightMode::Land
+                    };
+                    self.set_mode(s.t_s, next);
+                }
+            }
+            FlightMode::Takeoff | FlightMode::Hold => {
+                if s.pilot.manual {
+                    self.set_mode(s.t_s, FlightMode::Manual);
+                } else if self.autonomous_failsafes(s) || !s.pilot.arm {
+                    self.set_mode(s.t_s, FlightMode::Land);
+                } else if self.mode == FlightMode::Takeoff
+                    && s.estimate.position_m[2]
+                        >= self.config.takeoff_height_m - self.config.takeoff_tolerance_m
+                {
+                    self.set_mode(s.t_s, FlightMode::Hold);
+                }
+            }
+            FlightMode::Land => {
+                if s.pilot.manual && s.pilot.arm {
+                    self.set_mode(s.t_s, FlightMode::Manual);
+                } else {
+                    self.landing_checks(s);
+                }
+            }
+            FlightMode::Killed => {}
+        }
+        self.mode
+    }
+
+    fn maybe_arm(&mut self, s: &Status) {
+        let ready = s.pilot.arm && self.arm_seen_off && !self.battery_critical;
+        if !ready {
+            return;
+        }
+        let next = if s.pilot.manual {
+            FlightMode::Manual
+        } else if s.estimate.valid {
+            FlightMode::Takeoff
+        } else {
+            return;
+        };
+        self.arm_seen_off = false;
+        self.failsafe = None;
+        // The lidar gets a full timeout from arming to report.
+        self.last_scan_t_s = s.t_s;
+        self.set_mode(s.t_s, next);
+    }
+
+    /// Checks the failsafes of the autonomous modes; true when the vehicle must land. "Lidar
+    /// lost" alone keeps holding (on the IMU) until `lidar_hold_s` has passed.
+    fn autonomous_failsafes(&mut self, s: &Status) -> bool {
+        if self.battery_critical {
+            self.raise(s.t_s, FailsafeReason::BatteryCritical);
+            return true;
+        }
+        if !s.estimate.valid {
+            self.raise(s.t_s, FailsafeReason::EstimateInvalid);
+            return true;
+        }
+        if self.battery_low {
+            self.raise(s.t_s, FailsafeReason::BatteryLow);
+            return true;
+        }
+        let silent_s = (s.t_s - self.last_scan_t_s) as f32;
+        if silent_s > self.config.lidar_timeout_s {
+            self.raise(s.t_s, FailsafeReason::LidarLost);
+            return silent_s > self.config.lidar_timeout_s + self.config.lidar_hold_s;
+        }
+        if self.failsafe == Some(FailsafeReason::LidarLost) {
+            // The lidar is back within the hold time: the failsafe clears.
+            self.failsafe = None;
+        }
+        false
+    }
+
+    fn landing_checks(&mut self, s: &Status) {
+        if self.battery_critical {
+            self.raise(s.t_s, FailsafeReason::BatteryCritical);
+        }
+        let c = &self.config;
+        let e = &s.estimate;
+        let down = e.position_m[2] < c.touchdown_height_m
+            && libm::fabsf(e.velocity_m_s[2]) < c.touchdown_speed_m_s;
+        if !down {
+            self.touchdown_since_t_s = None;
+            return;
+        }
+        let since = *self.touchdown_since_t_s.get_or_insert(s.t_s);
+        if (s.t_s - since) as f32 >= c.touchdown_s {
+            self.touchdown_since_t_s = None;
+            self.set_mode(s.t_s, FlightMode::Disarmed);
+        }
+    }
+
+    /// Debounced, latching low and critical battery flags (cleared only by a new arming cycle
+    /// when the voltage has recovered, e.g. after a pack swap).
+    fn track_battery(&mut self, s: &Status) {
+        let Some(v) = s.battery_v else {
+            return;
+        };
+        let debounce = self.config.battery_debounce_s;
+        let t = s.t_s;
+        let held = |since: &mut Option<f64>, below: bool| -> bool {
+            if !below {
+                *since = None;
+                return false;
+            }
+            (t - *since.get_or_insert(t)) as f32 >= debounce
+        };
+        self.battery_low |= held(&mut self.low_since_t_s, v < self.config.battery_low_v);
+        self.battery_critical |= held(
+            &mut self.critical_since_t_s,
+            v < self.config.battery_critical_v,
+        );
+        if self.mode == FlightMode::Disarmed && v >= self.config.battery_low_v {
+            self.battery_low = false;
+            self.battery_critical = false;
+        }
+    }
+
+    fn raise(&mut self, t_s: f64, reason: FailsafeReason) {
+        if self.failsafe != Some(reason) {
+            self.failsafe = Some(reason);
+            self.events.push(t_s, EventKind::Failsafe(reason));
+        }
+    }
+
+    fn set_mode(&mut self, t_s: f64, to: FlightMode) {
+        if to != self.mode {
+            self.events.push(
+                t_s,
+                EventKind::ModeChange {
+                    from: self.mode,
+                    to,
+                },
+            );
+            self.mode = to;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Drives a supervisor with a scripted world: a height, a battery, a lidar that can stop.
+    struct Script {
+        sup: Supervisor,
+        t_s: f64,
+        pilot: PilotInput,
+        height_m: f32,
+        valid: bool,
+        lidar: bool,
+        battery_v: f32,
+    }
+
+    impl Script {
+        fn new() -> Self {
+            Self {
+                sup: Supervisor::new(SupervisorConfig::default()),
+                t_s: 0.0,
+                pilot: PilotInput::default(),
+                height_m: 0.0,
+                valid: true,
+                lidar: true,
+                battery_v: 12.0,
+            }
+        }
+
+        /// Runs for `secs` at 100 Hz (scans at 5 Hz) and returns the final mode.
+        fn run(&mut self, secs: f64) -> FlightMode {
+            let steps = (secs * 100.0).round() as usize;
+            for _ in 0..steps {
+                self.t_s += 0.01;
+                let tick = (self.t_s * 100.0).round() as u64;
+                let estimate = EstimatedState {
+                    position_m: [0.0, 0.0, self.height_m],
+                    valid: self.valid,
+                    ..Default::default()
+                };
+                self.sup.update(&Status {
+                    t_s: self.t_s,
+                    pilot: self.pilot,
+                    estimate,
+                    scan_accepted: self.lidar && tick.is_multiple_of(20),
+                    battery_v: Some(self.battery_v),
+                });
+            }
+            self.sup.mode()
+        }
+
+        fn climb_to_hold(&mut self) {
+            self.run(0.1);
+            self.pilot.arm = true;
+            assert_eq!(self.run(0.1), FlightMode::Takeoff);
+            self.height_m = 1.0;
+            assert_eq!(self.run(0.1), FlightMode::Hold);
+        }
+    }
+
+    #[test]
+    fn a_normal_flight_goes_through_every_mode_and_logs_it() {
+        let mut s = Script::new();
+        s.climb_to_hold();
+        s.pilot.arm = false;
+        assert_eq!(s.run(0.1), FlightMode::Land);
+        // Still airborne: no disarm.
+        assert_eq!(s.run(2.0), FlightMode::Land);
+        s.height_m = 0.02;
+        assert_eq!(s.run(0.3), FlightMode::Land);
+        assert_eq!(s.run(0.5), FlightMode::Disarmed);
+        let modes: [FlightMode; 4] = {
+            let mut it = s.sup.events().iter().map(|e| match e.kind {
+                EventKind::ModeChange { to, .. } => to,
+                EventKind::Failsafe(_) => FlightMode::Killed,
+            });
+            core::array::from_fn(|_| it.next().unwrap())
+        };
+        use FlightMode::*;
+        assert_eq!(modes, [Takeoff, Hold, Land, Disarmed]);
+        assert_eq!(s.sup.failsafe(), None);
+    }
+
+    #[test]
+    fn powering_up_with_the_arm_switch_on_does_not_take_off() {
+        let mut s = Script::new();
+        s.pilot.arm = true;
+        assert_eq!(s.run(1.0), FlightMode::Disarmed);
+        s.pilot.arm = false;
+        s.run(0.1);
+        s.pilot.arm = true;
+        assert_eq!(s.run(0.1), FlightMode::Takeoff);
+    }
+
+    #[test]
+    fn kill_switch_stops_everything_and_needs_a_fresh_arming() {
+        let mut s = Script::new();
+        s.climb_to_hold();
+        s.pilot.kill = true;
+        assert_eq!(s.run(0.01), FlightMode::Killed);
+        assert_eq!(s.sup.failsafe(), Some(FailsafeReason::KillSwitch));
+        s.pilot.kill = false;
+        s.height_m = 0.0;
+        // Arm still on: stays killed.
+        assert_eq!(s.run(1.0), FlightMode::Killed);
+        s.pilot.arm = false;
+        assert_eq!(s.run(0.1), FlightMode::Disarmed);
+        s.pilot.arm = true;
+        assert_eq!(s.run(0.1), FlightMode::Takeoff);
+        assert_eq!(s.sup.failsafe(), None);
+    }
+
+    #[test]
+    fn lidar_lost_holds_for_a_bounded_time_then_lands() {
+        let mut s = Script::new();
+        s.climb_to_hold();
+        s.lidar = false;
+        assert_eq!(s.run(1.5), FlightMode::Hold);
+        assert_eq!(s.sup.failsafe(), Some(FailsafeReason::LidarLost));
+        // Back within the hold time: the failsafe clears.
+        s.lidar = true;
+        assert_eq!(s.run(0.5), FlightMode::Hold);
+        assert_eq!(s.sup.failsafe(), None);
+        s.lidar = false;
+        assert_eq!(s.run(3.7), FlightMode::Hold);
+        assert_eq!(s.run(0.6), FlightMode::Land);
+        assert_eq!(s.sup.failsafe(), Some(FailsafeReason::LidarLost));
+    }
+
+    #[test]
+    fn invalid_estimate_lands() {
+        let mut s = Script::new();
+        s.climb_to_hold();
+        s.valid = false;
+        assert_eq!(s.run(0.01), FlightMode::Land);
+        assert_eq!(s.sup.failsafe(), Some(FailsafeReason::EstimateInvalid));
+    }
+
+    #[test]
+    fn low_battery_lands_after_the_debounce_and_a_sag_does_not() {
+        let mut s = Script::new();
+        s.climb_to_hold();
+        s.battery_v = 10.3;
+        assert_eq!(s.run(0.5), FlightMode::Hold);
+        s.battery_v = 11.0;
+        assert_eq!(s.run(1.0), FlightMode::Hold);
+        s.battery_v = 10.3;
+        assert_eq!(s.run(1.1), FlightMode::Land);
+        assert_eq!(s.sup.failsafe(), Some(FailsafeReason::BatteryLow));
+        // Sagging further while landing: critical.
+        s.battery_v = 9.5;
+        s.run(1.1);
+        assert_eq!(s.sup.failsafe(), Some(FailsafeReason::BatteryCritical));
+    }
+
+    #[test]
+    fn critical_battery_prevents_arming() {
+        let mut s = Script::new();
+        s.battery_v = 9.0;
+        s.run(2.0);
+        s.pilot.arm = true;
+        assert_eq!(s.run(0.1), FlightMode::Disarmed);
+    }
+
+    #[test]
+    fn manual_takeover_and_hand_back() {
+        let mut s = Script::new();
+        s.climb_to_hold();
+        s.pilot.manual = true;
+        assert_eq!(s.run(0.01), FlightMode::Manual);
+        // Failsafes do not override the safety pilot.
+        s.valid = false;
+        assert_eq!(s.run(1.0), FlightMode::Manual);
+        s.valid = true;
+        s.pilot.manual = false;
+        assert_eq!(s.run(0.01), FlightMode::Hold);
+    }
+}
