@@ -12,6 +12,8 @@
 //!
 //! State sizes (bytes, `core::mem::size_of`, printed and bounded by a test): see each decoder.
 
+pub mod scip;
+pub mod scip_command;
 pub mod xv11;
 pub mod xv11_old;
 pub mod xv11_revolution;

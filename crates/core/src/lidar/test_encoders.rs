@@ -45,3 +45,41 @@ pub fn xv11_revolution(speed_q6: u16, range: impl Fn(usize) -> u16) -> Vec<u8> {
     }
     out
 }
+
+/// A SCIP 2.0 value in `chars` characters: 6 bits each, most significant first, plus 0x30.
+pub fn scip_encode(value: u32, chars: usize) -> Vec<u8> {
+    (0..chars)
+        .rev()
+        .map(|i| ((value >> (6 * i)) & 0x3F) as u8 + 0x30)
+        .collect()
+}
+
+/// A SCIP 2.0 line: payload, sum character (low 6 bits of the byte sum, plus 0x30), LF.
+pub fn scip_line(payload: &[u8]) -> Vec<u8> {
+    let sum: u32 = payload.iter().map(|&b| u32::from(b)).sum();
+    let mut line = payload.to_vec();
+    line.push((sum % 64) as u8 + 0x30);
+    line.push(b'\n');
+    line
+}
+
+/// A whole scan reply: echo, status, timestamp, values cut into 64-character data lines,
+/// and the empty line that closes it.
+pub fn scip_scan_reply(
+    echo: &[u8],
+    status: &[u8],
+    timestamp_ms: u32,
+    values: &[u32],
+    chars: usize,
+) -> Vec<u8> {
+    let mut out = echo.to_vec();
+    out.push(b'\n');
+    out.extend(scip_line(status));
+    out.extend(scip_line(&scip_encode(timestamp_ms, 4)));
+    let data: Vec<u8> = values.iter().flat_map(|&v| scip_encode(v, chars)).collect();
+    for chunk in data.chunks(64) {
+        out.extend(scip_line(chunk));
+    }
+    out.push(b'\n');
+    out
+}
