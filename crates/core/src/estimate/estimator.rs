@@ -3,6 +3,7 @@
 //! A thin wrapper (DESIGN.md §2): it turns raw messages into the filters' inputs, counts every
 //! sample it could not use, and reports the estimate in the message type the controllers read.
 
+use super::at_rest::AtRestConfig;
 use super::attitude::{AttitudeConfig, AttitudeFilter};
 use super::ekf::{ix, Counters, Ekf, EkfConfig, Outcome};
 use super::imu::ImuStep;
@@ -16,6 +17,7 @@ pub struct EstimatorConfig {
     pub attitude: AttitudeConfig,
     pub ekf: EkfConfig,
     pub sonar: SonarConfig,
+    pub at_rest: AtRestConfig,
 }
 
 /// What happened to the inputs so far.
@@ -25,6 +27,7 @@ pub struct EstimatorCounters {
     pub imu_faults: u32,
     pub scan_match: Counters,
     pub sonar: Counters,
+    pub at_rest: Counters,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -122,6 +125,25 @@ impl Estimator {
             ]);
             outcome = self.ekf.fuse_sonar(&sonar, s.range_m, roll, pitch);
             self.counters.sonar.record(outcome);
+        }
+        outcome
+    }
+
+    /// Fuses "still on the floor", which the caller knows for a fact (disarmed, or an estimate
+    /// below the floor): a rejection means the filter is wrong, so velocity and height are
+    /// reopened at once and the fact applied.
+    pub fn fuse_at_rest(&mut self) -> Outcome {
+        let mut outcome = self.ekf.fuse_at_rest(&self.config.at_rest);
+        if self.counters.at_rest.record_gated(outcome, 1) {
+            let [_, sh, sv, _] = self.config.ekf.reopen_std;
+            self.ekf.reset_variance(&[
+                (ix::POS + 2, sh * sh),
+                (ix::VEL, sv * sv),
+                (ix::VEL + 1, sv * sv),
+                (ix::VEL + 2, sv * sv),
+            ]);
+            outcome = self.ekf.fuse_at_rest(&self.config.at_rest);
+            self.counters.at_rest.record(outcome);
         }
         outcome
     }

@@ -2,6 +2,7 @@
 //! biases predicted with the IMU and corrected by the scan matcher and the sonar (seed 002
 //! sec. IV: "EKF fusing laser, IMU and sonar"). One file per measurement model.
 
+pub mod at_rest;
 pub mod attitude;
 pub mod ekf;
 pub mod estimator;

@@ -11,6 +11,8 @@ use nalgebra::{SMatrix, SVector};
 /// Sonar model settings (defaults: MaxBotix MB1040, seed 002 sec. IV).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SonarConfig {
+    /// Readings at or beyond these bounds carry no height: the MB1040 reports 6 in for anything
+    /// closer and its maximum when no echo returns.
     pub min_range_m: f32,
     pub max_range_m: f32,
     /// Range one-sigma (m).
@@ -24,7 +26,7 @@ pub struct SonarConfig {
 impl Default for SonarConfig {
     fn default() -> Self {
         Self {
-            min_range_m: 0.0,
+            min_range_m: 0.1524,
             max_range_m: 6.45,
             range_std_m: 0.03,
             max_tilt_rad: 0.5,
@@ -37,8 +39,7 @@ impl Ekf {
     /// Fuses one sonar range taken at the given tilt.
     pub fn fuse_sonar(&mut self, c: &SonarConfig, range_m: f32, roll: f32, pitch: f32) -> Outcome {
         let tilt_ok = roll.abs() <= c.max_tilt_rad && pitch.abs() <= c.max_tilt_rad;
-        if !(range_m.is_finite() && range_m >= c.min_range_m && range_m <= c.max_range_m && tilt_ok)
-        {
+        if !(range_m.is_finite() && range_m > c.min_range_m && range_m < c.max_range_m && tilt_ok) {
             return Outcome::Invalid;
         }
         let k = cosf(roll) * cosf(pitch);
@@ -76,11 +77,11 @@ mod tests {
     #[test]
     fn out_of_band_ranges_and_steep_tilts_are_refused() {
         let mut f = Ekf::new(EkfConfig::default());
-        let c = SonarConfig {
-            min_range_m: 0.15,
-            ..SonarConfig::default()
-        };
+        let c = SonarConfig::default();
         assert_eq!(f.fuse_sonar(&c, 0.05, 0.0, 0.0), Outcome::Invalid);
+        // The device's own floor and ceiling values mean "too close" and "no echo".
+        assert_eq!(f.fuse_sonar(&c, 0.1524, 0.0, 0.0), Outcome::Invalid);
+        assert_eq!(f.fuse_sonar(&c, 6.45, 0.0, 0.0), Outcome::Invalid);
         assert_eq!(f.fuse_sonar(&c, 9.0, 0.0, 0.0), Outcome::Invalid);
         assert_eq!(f.fuse_sonar(&c, f32::NAN, 0.0, 0.0), Outcome::Invalid);
         assert_eq!(f.fuse_sonar(&c, 1.0, 0.8, 0.0), Outcome::Invalid);

@@ -143,6 +143,13 @@ impl Autopilot {
             let outcome = self.estimator.fuse_scan_match(&m);
             m.status == ScanMatchStatus::Matched && outcome == Outcome::Accepted
         });
+        // Disarmed means on the floor; so does an estimate below the floor, which happens when a
+        // touchdown stops the vehicle below the sonar's minimum range and the IMU missed the
+        // shock: it is still and at height zero.
+        let below_floor = self.estimator.state().position_m[2] < 0.0;
+        if self.mode == FlightMode::Disarmed || below_floor {
+            self.estimator.fuse_at_rest();
+        }
         let estimate = self.estimator.state();
         let rates = self
             .estimator
