@@ -1,0 +1,171 @@
+//! The onboard stack: keyframe lidar odometry feeding the autopilot.
+//!
+//! Seed 000 Fig. 8: the lidar's revolutions go through the scan matcher, whose displacement
+//! (Δx, Δy against the reference scan) drives the position hold. [`Onboard`] owns the
+//! [`LidarOdometry`] and the [`Autopilot`]; a driver hands it the sensor inputs and, when a
+//! revolution completes, the scan. The translation from the odometry's step to the estimator's
+//! [`ScanMatchDelta`] is [`scan_match_delta`].
+
+use super::autopilot::{Autopilot, AutopilotConfig};
+use crate::matching::{LidarOdometry, MatchError, OdometryConfig, OdometryStep};
+use crate::msgs::{Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
+use crate::scan::Scan;
+
+/// Lidar odometry plus autopilot, for scans of up to `N` beams.
+#[derive(Clone, Debug)]
+pub struct Onboard<const N: usize> {
+    odometry: LidarOdometry<N>,
+    autopilot: Autopilot,
+    /// Scan points the matcher's dynamic-object test has rejected so far (seed 000 sec. 4.2).
+    rejected_points: u64,
+}
+
+impl<const N: usize> Onboard<N> {
+    pub fn new(odometry: OdometryConfig, autopilot: AutopilotConfig) -> Self {
+        Self {
+            odometry: LidarOdometry::new(odometry),
+            autopilot: Autopilot::new(autopilot),
+            rejected_points: 0,
+        }
+    }
+
+    pub fn autopilot(&self) -> &Autopilot {
+        &self.autopilot
+    }
+
+    pub fn rejected_points(&self) -> u64 {
+        self.rejected_points
+    }
+
+    /// One step: match the scan if one completed, then run the autopilot. A scan-match result
+    /// already in `inputs` is replaced when a scan is given.
+    pub fn step(&mut self, inputs: &Inputs, scan: Option<&Scan<N>>, dt: f32) -> Outputs {
+        let mut inputs = *inputs;
+        if let Some(scan) = scan {
+            let step = self.odometry.update(scan, None);
+            if let OdometryStep::Matched { result, .. } = &step {
+                self.rejected_points += u64::from(result.quality.rejected_dynamic);
+            }
+            inputs.scan_match = Some(scan_match_delta(&step, scan.stamp_s));
+        }
+        self.autopilot.step(&inputs, dt)
+    }
+}
+
+/// The estimator's view of one odometry step. The odometry matches against keyframes, so the
+/// pose change is relative to the current keyframe and the filter re-clones its reference pose
+/// exactly when the odometry takes a new keyframe.
+pub fn scan_match_delta(step: &OdometryStep, t_s: f64) -> ScanMatchDelta {
+    let mut delta = ScanMatchDelta {
+        t_s,
+        status: ScanMatchStatus::Failed,
+        dx_m: 0.0,
+        dy_m: 0.0,
+        dtheta_rad: 0.0,
+        covariance: [[0.0; 3]; 3],
+        degenerate_axis: None,
+        becomes_reference: false,
+    };
+    match step {
+        OdometryStep::Started => {
+            delta.status = ScanMatchStatus::ReferenceOnly;
+            delta.becomes_reference = true;
+        }
+        OdometryStep::Matched {
+            result,
+            new_keyframe,
+        } => {
+            delta.status = ScanMatchStatus::Matched;
+            delta.dx_m = result.motion.x;
+            delta.dy_m = result.motion.y;
+            delta.dtheta_rad = result.motion.theta;
+            delta.covariance = result.covariance;
+            delta.degenerate_axis = result.quality.degenerate_direction.map(|d| [d.x, d.y]);
+            delta.becomes_reference = *new_keyframe;
+        }
+        OdometryStep::Predicted { error } => {
+            // After a failed match the odometry restarts from this scan unless the scan itself
+            // was unusable.
+            delta.becomes_reference = !matches!(
+                error,
+                MatchError::TooFewPoints { .. } | MatchError::BeamsNotInAngularOrder { .. }
+            );
+        }
+    }
+    delta
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::geom::Pose2;
+
+    /// A 360-beam scan of a 6 m x 4 m room (walls at x = -3, 3 and y = -2, 2) taken at `pose`.
+    fn room_scan(pose: Pose2, stamp_s: f64) -> Scan<360> {
+        let mut scan = Scan::new(stamp_s);
+        for k in 0..360 {
+            let a = (k as f32).to_radians();
+            let (s, c) = libm::sincosf(a + pose.theta);
+            let mut r = f32::INFINITY;
+            for (d, wall) in [
+                (c, 3.0 - pose.x),
+                (-c, 3.0 + pose.x),
+                (s, 2.0 - pose.y),
+                (-s, 2.0 + pose.y),
+            ] {
+                if d > 1e-6 {
+                    r = r.min(wall / d);
+                }
+            }
+            scan.push(crate::scan::Beam::new(a, r)).unwrap();
+        }
+        scan
+    }
+
+    #[test]
+    fn odometry_steps_map_onto_the_estimator_message() {
+        let mut odometry = LidarOdometry::<360>::new(OdometryConfig::default());
+        let first = odometry.update(&room_scan(Pose2::IDENTITY, 0.0), None);
+        let started = scan_match_delta(&first, 0.0);
+        assert_eq!(started.status, ScanMatchStatus::ReferenceOnly);
+        assert!(started.becomes_reference);
+
+        let moved = Pose2::new(0.05, -0.03, 0.02);
+        let step = odometry.update(&room_scan(moved, 0.25), None);
+        let m = scan_match_delta(&step, 0.25);
+        assert_eq!(m.status, ScanMatchStatus::Matched, "{step:?}");
+        assert!(
+            (m.dx_m - 0.05).abs() < 0.01 && (m.dy_m + 0.03).abs() < 0.01,
+            "{m:?}"
+        );
+        assert!((m.dtheta_rad - 0.02).abs() < 0.005, "{m:?}");
+        assert!(m.covariance[0][0] > 0.0 && m.covariance[1][1] > 0.0);
+        assert!(!m.becomes_reference && m.t_s == 0.25);
+
+        let lost = OdometryStep::Predicted {
+            error: MatchError::TooFewCorrespondences {
+                found: 3,
+                needed: 20,
+            },
+        };
+        let f = scan_match_delta(&lost, 3.0);
+        assert_eq!(f.status, ScanMatchStatus::Failed);
+        assert!(f.becomes_reference);
+        let blind = OdometryStep::Predicted {
+            error: MatchError::TooFewPoints {
+                reference: 300,
+                current: 2,
+                needed: 20,
+            },
+        };
+        assert!(!scan_match_delta(&blind, 4.0).becomes_reference);
+    }
+
+    #[test]
+    fn onboard_stack_size_is_known() {
+        let size = core::mem::size_of::<Onboard<360>>();
+        std::println!("size_of::<Onboard<360>>() = {size} bytes");
+        assert!(size < 256 * 1024, "{size}");
+    }
+}
