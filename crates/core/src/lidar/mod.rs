@@ -12,6 +12,7 @@
 //!
 //! State sizes (bytes, `core::mem::size_of`, printed and bounded by a test): see each decoder.
 
+pub mod rplidar;
 pub mod scip;
 pub mod scip_command;
 pub mod xv11;

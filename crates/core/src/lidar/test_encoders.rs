@@ -83,3 +83,23 @@ pub fn scip_scan_reply(
     out.push(b'\n');
     out
 }
+
+/// The RPLIDAR response descriptor for a standard scan: sync A5 5A, length 5 and "multiple
+/// response" mode packed in 32 bits LE, data type 0x81.
+pub fn rplidar_descriptor() -> Vec<u8> {
+    let len_and_mode: u32 = 5 | (1 << 30);
+    let mut out = std::vec![0xA5, 0x5A];
+    out.extend_from_slice(&len_and_mode.to_le_bytes());
+    out.push(0x81);
+    out
+}
+
+/// One RPLIDAR standard-scan node from clockwise degrees and millimetres.
+pub fn rplidar_node(start: bool, quality: u8, angle_deg: f64, distance_mm: f64) -> [u8; 5] {
+    let flags = if start { 0b01 } else { 0b10 };
+    let angle = ((angle_deg * 64.0).round() as u16) << 1 | 1;
+    let dist = (distance_mm * 4.0).round() as u16;
+    let [a0, a1] = angle.to_le_bytes();
+    let [d0, d1] = dist.to_le_bytes();
+    [quality << 2 | flags, a0, a1, d0, d1]
+}
