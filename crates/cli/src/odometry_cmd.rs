@@ -61,6 +61,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
     let mut times_us = Vec::with_capacity(log.scans.len());
     let mut trajectory = Vec::with_capacity(log.scans.len());
     let (mut failed, mut keyframes, mut degenerate, mut rejected) = (0usize, 0usize, 0usize, 0u64);
+    let (mut recovered, mut iterations) = (0usize, 0u64);
     let mut first_failure: Option<String> = None;
     let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
     let mut previous_odom: Option<OdomPose> = None;
@@ -91,6 +92,8 @@ pub fn run(args: OdometryArgs) -> CliResult {
                 keyframes += new_keyframe as usize;
                 degenerate += result.quality.degenerate_direction.is_some() as usize;
                 rejected += result.quality.rejected_dynamic as u64;
+                recovered += result.quality.recovered as usize;
+                iterations += result.quality.iterations as u64;
             }
             OdometryStep::Predicted { error } => {
                 failed += 1;
@@ -129,6 +132,8 @@ pub fn run(args: OdometryArgs) -> CliResult {
         "keyframes": keyframes,
         "degenerate_matches": degenerate,
         "rejected_points": rejected,
+        "recovered_matches": recovered,
+        "mean_iterations": if times_us.is_empty() { 0.0 } else { iterations as f64 / times_us.len() as f64 },
         "odom_prior": args.odom_prior,
         "non_monotonic_scans": log.stats.non_monotonic_scans,
         "bad_lines": log.stats.bad_lines,

@@ -329,14 +329,40 @@ fn scans_that_do_not_overlap_fail_cleanly() {
 }
 
 #[test]
-fn a_far_wrong_guess_is_visible_in_the_quality_report() {
-    let mut m = matcher::<360>(MatcherKind::Icl);
+fn a_wrong_heading_guess_is_recovered_by_the_heading_search() {
     let s: Scan<360> = scan(&room(), Pose2::IDENTITY, 360, std::f32::consts::TAU, 0.0, 1);
+    let mut m = matcher::<360>(MatcherKind::Icl);
     m.set_reference(&s).unwrap();
-    // The same scan, but the guess says the vehicle turned 115 degrees: a wrong local minimum.
-    let r = m.match_scan(&s, Pose2::new(0.0, 0.0, 2.0)).unwrap();
-    let q = r.quality;
-    assert!(q.inlier_ratio < 0.6 && q.rms_residual_m > 0.1, "{q:?}");
+    // The same scan, but the guess says the vehicle turned 54 degrees: outside the iteration's
+    // basin (see the next test), inside the search's.
+    let r = m.match_scan(&s, Pose2::new(0.0, 0.0, 0.95)).unwrap();
+    assert!(r.quality.recovered, "{:?}", r.quality);
+    let (et, er) = Pose2::IDENTITY.distance_to(r.motion);
+    assert!(et < 1e-3 && er < 1e-3, "{:?}", r.motion);
+}
+
+#[test]
+fn without_recovery_a_wrong_guess_shows_in_the_quality_report() {
+    let s: Scan<360> = scan(&room(), Pose2::IDENTITY, 360, std::f32::consts::TAU, 0.0, 1);
+    let mut m = ScanMatcher::<360>::new(MatchConfig {
+        recovery: false,
+        ..MatchConfig::default()
+    });
+    m.set_reference(&s).unwrap();
+    match m.match_scan(&s, Pose2::new(0.0, 0.0, 0.95)) {
+        Ok(r) => assert!(
+            r.quality.inlier_ratio < 0.6 && r.quality.rms_residual_m > 0.05,
+            "{:?}",
+            r.quality
+        ),
+        Err(e) => assert!(
+            matches!(
+                e,
+                MatchError::TooFewCorrespondences { .. } | MatchError::Diverged
+            ),
+            "{e:?}"
+        ),
+    }
 }
 
 #[test]

@@ -149,6 +149,7 @@ pub fn report(
             rejected_dynamic,
             degenerate_direction: degenerate,
             conditioning,
+            recovered: false,
         },
     }
 }

@@ -134,7 +134,13 @@ impl<const N: usize> ScanMatcher<N> {
             let second = attempt(recovery::best_heading(reference, current, guess, cfg));
             match (&first, &second) {
                 (Ok(a), Ok(b)) if a.quality.inliers >= b.quality.inliers => first,
-                (_, Ok(_)) => second,
+                (_, Ok(b)) => Ok(MatchResult {
+                    quality: MatchQuality {
+                        recovered: true,
+                        ..b.quality
+                    },
+                    ..*b
+                }),
                 _ => first,
             }
         } else {

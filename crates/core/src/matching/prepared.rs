@@ -40,6 +40,8 @@ pub struct PreparedScan<const N: usize> {
     len: usize,
     /// The beams go all the way round, so windows wrap from the last point to the first.
     full_circle: bool,
+    /// Two mean beam steps: how far outside the first and last beam a query still projects.
+    margin: f32,
     has_lines: bool,
 }
 
@@ -51,6 +53,7 @@ impl<const N: usize> Default for PreparedScan<N> {
             lines: [LineFit::default(); N],
             len: 0,
             full_circle: false,
+            margin: 0.0,
             has_lines: false,
         }
     }
@@ -88,6 +91,7 @@ impl<const N: usize> PreparedScan<N> {
         };
         // Within 3 beam steps of a full turn: treat as a closed ring.
         self.full_circle = span + 3.0 * self.mean_step() >= TAU;
+        self.margin = 2.0 * self.mean_step();
         Ok(())
     }
 
@@ -179,27 +183,38 @@ impl<const N: usize> PreparedScan<N> {
         if self.len == 0 {
             return None;
         }
-        let a0 = self.bearings[0];
-        let mut phi = atan2_approx(q.y, q.x);
-        // Bring the bearing into [a0, a0 + 2pi).
-        phi -= a0;
-        phi -= TAU * libm::floorf(phi / TAU);
-        phi += a0;
         let b = &self.bearings[..self.len];
+        // Bring the bearing into [a0 - margin, a0 - margin + 2pi), so a point just before the
+        // first beam stays just before it instead of wrapping to the far end. atan2 is in
+        // (-pi, pi] and the base within a turn of it, so two conditional turns suffice.
+        let base = b[0] - self.margin;
+        let mut phi = atan2_approx(q.y, q.x) - base;
+        if phi < 0.0 {
+            phi += TAU;
+        }
+        if phi < 0.0 {
+            phi += TAU;
+        }
+        if phi >= TAU {
+            phi -= TAU;
+        }
+        phi += base;
+        if !self.full_circle && phi > b[self.len - 1] + self.margin {
+            return None;
+        }
+        // Queries arrive in angular order, so a short walk from the last answer usually lands;
+        // a jump (a gap in the scan, an occlusion edge) falls back to bisection.
         let mut k = hint.min(self.len);
-        while k < self.len && b[k] < phi {
-            k += 1;
-        }
-        while k > 0 && b[k - 1] >= phi {
-            k -= 1;
-        }
-        if !self.full_circle {
-            let margin = 2.0 * self.mean_step();
-            if phi < b[0] - margin || phi > b[self.len - 1] + margin {
-                return None;
+        for _ in 0..8 {
+            if k < self.len && b[k] < phi {
+                k += 1;
+            } else if k > 0 && b[k - 1] >= phi {
+                k -= 1;
+            } else {
+                return Some(k);
             }
         }
-        Some(k)
+        Some(b.partition_point(|&a| a < phi))
     }
 
     fn mean_step(&self) -> f32 {
@@ -213,17 +228,28 @@ impl<const N: usize> PreparedScan<N> {
     /// The nearest point to `q` among `half_window` points either side of `k`, with its squared
     /// distance.
     pub fn nearest_in_window(&self, q: Vec2, k: usize, half_window: usize) -> Option<(usize, f32)> {
-        let mut best: Option<(usize, f32)> = None;
-        let lo = k as isize - half_window as isize;
-        let hi = k as isize + half_window as isize;
-        for j in lo..hi {
-            let Some(j) = self.wrap(j) else { continue };
-            let d2 = (self.points[j] - q).norm_squared();
-            if best.is_none_or(|(_, b)| d2 < b) {
-                best = Some((j, d2));
+        let n = self.len as isize;
+        let (lo, hi) = (
+            k as isize - half_window as isize,
+            k as isize + half_window as isize,
+        );
+        let mut best = (usize::MAX, f32::INFINITY);
+        let mut scan = |from: isize, to: isize| {
+            let (from, to) = (from.clamp(0, n) as usize, to.clamp(0, n) as usize);
+            for (j, p) in self.points[from..to].iter().enumerate() {
+                let d2 = (*p - q).norm_squared();
+                if d2 < best.1 {
+                    best = (from + j, d2);
+                }
             }
+        };
+        scan(lo, hi);
+        if self.full_circle {
+            // The parts of the window that wrap past either end of the ring.
+            scan(n + lo, n);
+            scan(0, hi - n);
         }
-        best
+        (best.0 != usize::MAX).then_some(best)
     }
 }
 

@@ -7,7 +7,7 @@
 
 use super::config::MatchConfig;
 use super::prepared::PreparedScan;
-use crate::geom::Pose2;
+use crate::geom::{Pose2, Vec2};
 
 /// The heading candidate (translation kept from `guess`) under which most points find a
 /// reference point within `radius_m`.

@@ -27,6 +27,8 @@ pub struct MatchQuality {
     pub degenerate_direction: Option<Vec2>,
     /// Least over most translational information (1 = equally constrained in x and y).
     pub conditioning: f32,
+    /// The first attempt failed or was poor and a heading search found a better start.
+    pub recovered: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
