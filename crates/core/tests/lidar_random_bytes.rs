@@ -99,3 +99,67 @@ fn xv11_truncation_anywhere_never_shifts_a_reading() {
         })
         .unwrap();
 }
+
+fn random_bytes() -> impl Strategy<Value = Vec<u8>> {
+    proptest::collection::vec(any::<u8>(), 0..6000)
+}
+
+#[test]
+fn xv11_old_random_bytes_never_panic() {
+    use plumbline_core::lidar::xv11_old::{Xv11OldDecoder, FRAME_LEN};
+    runner(256)
+        .run(&random_bytes(), |bytes| {
+            let mut d = Xv11OldDecoder::new();
+            let n =
+                bytes.iter().filter_map(|&b| d.push(b)).count() + usize::from(d.finish().is_some());
+            prop_assert!(n <= bytes.len() / FRAME_LEN);
+            prop_assert_eq!(d.stats().bytes, bytes.len() as u64);
+            Ok(())
+        })
+        .unwrap();
+}
+
+#[test]
+fn scip_random_bytes_and_random_lines_never_panic() {
+    use plumbline_core::lidar::scip::ScipDecoder;
+    // Raw bytes, and lines of SCIP-looking characters (which reach the deeper states).
+    let scipish = proptest::collection::vec(
+        prop_oneof![Just(b'\n'), 0x30u8..0x70, Just(b'M'), Just(b'D')],
+        0..6000,
+    );
+    for strategy in [random_bytes().boxed(), scipish.boxed()] {
+        runner(256)
+            .run(&strategy, |bytes| {
+                let mut d = ScipDecoder::<769>::new();
+                for &b in &bytes {
+                    if let Some(scan) = d.push(b) {
+                        prop_assert!(!scan.ranges_mm().is_empty() && scan.cluster >= 1);
+                    }
+                }
+                prop_assert_eq!(d.stats().bytes, bytes.len() as u64);
+                Ok(())
+            })
+            .unwrap();
+    }
+}
+
+#[test]
+fn rplidar_random_bytes_never_panic_and_nodes_are_plausible() {
+    use plumbline_core::lidar::rplidar::RplidarDecoder;
+    runner(256)
+        .run(&random_bytes(), |bytes| {
+            let mut d = RplidarDecoder::<800>::new();
+            let mut nodes = 0u32;
+            let mut revs: Vec<_> = bytes.iter().filter_map(|&b| d.push(b)).collect();
+            revs.extend(d.finish());
+            for r in &revs {
+                nodes += r.nodes().len() as u32;
+                prop_assert!(r.nodes().iter().all(|n| n.angle_q6 < 360 * 64));
+            }
+            let s = d.stats();
+            prop_assert_eq!(nodes + s.overflow, s.packets_ok);
+            prop_assert!(u64::from(s.packets_ok) * 5 + s.skipped_bytes <= s.bytes);
+            Ok(())
+        })
+        .unwrap();
+}
