@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct DecodeArgs {
-    /// xv11 | xv11-old
+    /// xv11 | xv11-old | urg | rplidar
     #[arg(long)]
     device: Device,
     /// The raw capture.

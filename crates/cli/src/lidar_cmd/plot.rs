@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct PlotArgs {
-    /// xv11 | xv11-old
+    /// xv11 | xv11-old | urg | rplidar
     #[arg(long)]
     device: Device,
     capture: PathBuf,

@@ -13,7 +13,7 @@ use std::time::Duration;
 
 #[derive(Args)]
 pub struct RecordArgs {
-    /// xv11 | xv11-old
+    /// xv11 | xv11-old | urg | rplidar
     #[arg(long)]
     device: Device,
     /// Serial port, e.g. /dev/ttyUSB0.

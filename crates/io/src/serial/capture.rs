@@ -83,4 +83,32 @@ mod tests {
         assert!(scans.is_empty());
         assert_eq!(summary.stats.skipped_bytes, 5000);
     }
+
+    #[test]
+    fn urg_reply_becomes_an_equally_spaced_record_from_step_44() {
+        // GS, steps 44..=45: two values "CB" = 1234 mm (SCIP 2.0 spec example), hand-summed.
+        let (scans, summary) =
+            decode_capture(Device::Urg, b"GS0044004500\n00P\n00000\nCBCB:\n\n", 115_200);
+        assert_eq!((scans.len(), summary.stats.revolutions), (1, 1));
+        let rec = &scans[0].record;
+        assert_eq!(rec.ranges_m, [1.234, 1.234]);
+        assert!((rec.start_angle_rad.to_degrees() + 119.53125).abs() < 1e-4);
+        assert!((rec.increment_rad.to_degrees() - 0.3515625).abs() < 1e-6);
+    }
+
+    #[test]
+    fn rplidar_nodes_land_in_whole_degree_bins() {
+        let bytes = [
+            0xA5, 0x5A, 0x05, 0x00, 0x00, 0x40, 0x81, // standard-scan response descriptor
+            0xBD, 0x01, 0x00, 0xA0, 0x0F, // S, quality 47, 0 deg, 1000 mm
+            0xBE, 0x01, 0x2D, 0x08, 0x11, // quality 47, 90 deg clockwise, 1090 mm
+        ];
+        let (scans, summary) = decode_capture(Device::Rplidar, &bytes, 115_200);
+        assert_eq!((scans.len(), summary.stats.packets_ok), (1, 2));
+        let rec = &scans[0].record;
+        assert_eq!(rec.beam_count(), 360);
+        assert_eq!((rec.valid[179], rec.ranges_m[179]), (true, 1.0));
+        assert_eq!((rec.valid[89], rec.ranges_m[89]), (true, 1.09)); // -90 deg: the right
+        assert_eq!(scans[0].invalid_beams(), 358);
+    }
 }

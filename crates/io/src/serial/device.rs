@@ -1,6 +1,8 @@
 //! One switch over the core decoders, so callers name a device and get CARMEN records.
 
 use crate::carmen::LaserRecord;
+use plumbline_core::lidar::rplidar::{RplidarConfig, RplidarDecoder, RplidarRevolution};
+use plumbline_core::lidar::scip::{ScipDecoder, ScipScan, UrgConfig};
 use plumbline_core::lidar::xv11_old::Xv11OldDecoder;
 use plumbline_core::lidar::xv11_revolution::{Revolution, Xv11Decoder};
 use plumbline_core::lidar::DecodeStats;
@@ -15,15 +17,19 @@ pub enum Device {
     Xv11,
     /// Neato XV-11 before firmware 2.4 (1446-byte frames).
     Xv11Old,
+    /// Hokuyo URG-04LX speaking SCIP 2.0 (MD/MS/GD/GS replies).
+    Urg,
+    /// Slamtec RPLIDAR A1/A2 standard scan.
+    Rplidar,
 }
 
 impl Device {
-    pub const NAMES: &'static [&'static str] = &["xv11", "xv11-old"];
+    pub const NAMES: &'static [&'static str] = &["xv11", "xv11-old", "urg", "rplidar"];
 
     /// The device's usual baud rate: the default for recording and for stamping file decodes.
     pub fn default_baud(self) -> u32 {
         match self {
-            Device::Xv11 | Device::Xv11Old => 115_200,
+            Device::Xv11 | Device::Xv11Old | Device::Urg | Device::Rplidar => 115_200,
         }
     }
 }
@@ -34,6 +40,8 @@ impl FromStr for Device {
         match s {
             "xv11" => Ok(Device::Xv11),
             "xv11-old" => Ok(Device::Xv11Old),
+            "urg" => Ok(Device::Urg),
+            "rplidar" => Ok(Device::Rplidar),
             _ => Err(format!(
                 "unknown device '{s}' (expected one of {})",
                 Device::NAMES.join(", ")
@@ -47,6 +55,8 @@ impl fmt::Display for Device {
         let i = match self {
             Device::Xv11 => 0,
             Device::Xv11Old => 1,
+            Device::Urg => 2,
+            Device::Rplidar => 3,
         };
         f.write_str(Device::NAMES[i])
     }
@@ -58,7 +68,8 @@ impl fmt::Display for Device {
 pub struct DecodedScan {
     pub record: LaserRecord,
     pub rpm: Option<f32>,
-    /// Stream offset of the revolution's first byte; with the baud rate, a clock for captures.
+    /// Stream offset of the revolution's first byte (XV-11), or of the byte that completed it
+    /// (URG, RPLIDAR, whose decoders keep no offsets); with the baud rate, a clock for captures.
     pub first_offset: u64,
 }
 
@@ -111,10 +122,65 @@ fn from_xv11(rev: Revolution) -> DecodedScan {
     }
 }
 
+fn from_urg(scan: ScipScan<URG_STEPS>, offset: u64) -> DecodedScan {
+    let cfg = UrgConfig::URG_04LX;
+    let start_deg = cfg.step_angle_rad(scan.value_step(0)).to_degrees();
+    let step_deg = f32::from(scan.cluster) * 360.0 / f32::from(cfg.steps_per_rev);
+    // Values above DMAX are invalid; a max range just past it keeps them invalid on reading.
+    let max_m = cfg.max_range_mm as f32 / 1000.0 + 0.001;
+    let record = record_from_scan(&scan.to_scan(&cfg), start_deg, step_deg, max_m);
+    DecodedScan {
+        record,
+        rpm: Some(60.0 / cfg.scan_period_s),
+        first_offset: offset,
+    }
+}
+
+/// RPLIDAR nodes fall at uneven angles; CARMEN needs equal spacing, so each node goes to the
+/// nearest whole degree on the XV-11's grid (-179..=180), the node nearest the bin centre
+/// winning. Bins no node reached are invalid.
+fn from_rplidar(rev: RplidarRevolution<RPLIDAR_NODES>, offset: u64) -> DecodedScan {
+    let cfg = RplidarConfig::A1;
+    let scan = rev.to_scan(&cfg);
+    let mut ranges = vec![0.0f32; 360];
+    let mut valid = vec![false; 360];
+    let mut miss = vec![f32::INFINITY; 360];
+    for b in scan.beams().iter().filter(|b| b.valid) {
+        let deg = b.angle_rad.to_degrees();
+        let bin = deg.round();
+        let j = ((bin as i32 + 179).rem_euclid(360)) as usize;
+        if (deg - bin).abs() < miss[j] {
+            miss[j] = (deg - bin).abs();
+            ranges[j] = b.range_m;
+            valid[j] = true;
+        }
+    }
+    let mut record = LaserRecord::new(
+        0.0,
+        (-179f32).to_radians(),
+        1f32.to_radians(),
+        cfg.max_range_m,
+        ranges,
+    );
+    record.valid = valid;
+    DecodedScan {
+        record,
+        rpm: rev.rpm(&cfg),
+        first_offset: offset,
+    }
+}
+
+/// URG-04LX: steps 0..=768.
+const URG_STEPS: usize = 769;
+/// RPLIDAR standard scan: about 360-400 nodes a turn; twice that for margin.
+const RPLIDAR_NODES: usize = 800;
+
 /// Any device's decoder. Boxed: the decoders hold whole revolutions.
 pub enum DeviceDecoder {
     Xv11(Box<Xv11Decoder>),
     Xv11Old(Box<Xv11OldDecoder>),
+    Urg(Box<ScipDecoder<URG_STEPS>>),
+    Rplidar(Box<RplidarDecoder<RPLIDAR_NODES>>),
 }
 
 impl DeviceDecoder {
@@ -122,6 +188,8 @@ impl DeviceDecoder {
         match device {
             Device::Xv11 => DeviceDecoder::Xv11(Box::default()),
             Device::Xv11Old => DeviceDecoder::Xv11Old(Box::default()),
+            Device::Urg => DeviceDecoder::Urg(Box::default()),
+            Device::Rplidar => DeviceDecoder::Rplidar(Box::default()),
         }
     }
 
@@ -129,6 +197,8 @@ impl DeviceDecoder {
         match self {
             DeviceDecoder::Xv11(d) => d.push(byte).map(from_xv11),
             DeviceDecoder::Xv11Old(d) => d.push(byte).map(from_xv11),
+            DeviceDecoder::Urg(d) => d.push(byte).map(|s| from_urg(s, d.stats().bytes)),
+            DeviceDecoder::Rplidar(d) => d.push(byte).map(|r| from_rplidar(r, d.stats().bytes)),
         }
     }
 
@@ -137,6 +207,8 @@ impl DeviceDecoder {
         match self {
             DeviceDecoder::Xv11(d) => d.finish().map(from_xv11),
             DeviceDecoder::Xv11Old(d) => d.finish().map(from_xv11),
+            DeviceDecoder::Urg(_) => None, // a SCIP scan is complete only at its closing line
+            DeviceDecoder::Rplidar(d) => d.finish().map(|r| from_rplidar(r, d.stats().bytes)),
         }
     }
 
@@ -144,6 +216,8 @@ impl DeviceDecoder {
         match self {
             DeviceDecoder::Xv11(d) => d.stats(),
             DeviceDecoder::Xv11Old(d) => d.stats(),
+            DeviceDecoder::Urg(d) => d.stats(),
+            DeviceDecoder::Rplidar(d) => d.stats(),
         }
     }
 }
