@@ -23,11 +23,25 @@ pub struct AttitudeConfig {
     pub max_bias_rad_s: f32,
 }
 
-impl Default for AttitudeConfig {
-    fn default() -> Self {
+impl AttitudeConfig {
+    /// Gains for a filter that stands alone (no EKF correcting its tilt): the accelerometer
+    /// pulls within seconds and the gyro bias is learned within tens of seconds.
+    pub fn standalone() -> Self {
         Self {
             kp_per_s: 0.5,
             ki_per_s2: 0.05,
+            ..Self::default()
+        }
+    }
+}
+
+impl Default for AttitudeConfig {
+    /// Gains for use under the EKF, which corrects the tilt from the lidar: the accelerometer's
+    /// pull is weak because a multirotor's accelerometer mostly sees thrust, not gravity.
+    fn default() -> Self {
+        Self {
+            kp_per_s: 0.05,
+            ki_per_s2: 0.002,
             accel_reject_fraction: 0.25,
             max_bias_rad_s: 0.1,
         }
@@ -71,6 +85,24 @@ impl AttitudeFilter {
     pub fn corrected_rate(&self, gyro_rad_s: [f32; 3]) -> [f32; 3] {
         let w = Vector3::from(gyro_rad_s) - self.bias_rad_s;
         [w.x, w.y, w.z]
+    }
+
+    /// Applies a small tilt correction estimated elsewhere (the EKF): `error` is the angle
+    /// (rad) about the x and y axes of a world frame whose heading is `heading_rad`, such that
+    /// the true attitude is `exp(error) * estimate`.
+    pub fn correct_tilt(&mut self, error: [f32; 2], heading_rad: f32) {
+        if !(error.iter().all(|e| e.is_finite()) && heading_rad.is_finite()) {
+            return;
+        }
+        // Into the heading frame, then into this filter's own (free-heading) world frame.
+        let (_, _, own_heading) = self.rotation.euler_angles();
+        let (s, c) = libm::sincosf(own_heading - heading_rad);
+        let axis = Vector3::new(
+            c * error[0] - s * error[1],
+            s * error[0] + c * error[1],
+            0.0,
+        );
+        self.rotation = UnitQuaternion::from_scaled_axis(axis) * self.rotation;
     }
 
     /// One step with a gyro and accelerometer sample. Bad samples leave the state unchanged.
@@ -133,7 +165,7 @@ mod tests {
 
     #[test]
     fn converges_to_the_resting_tilt_from_level() {
-        let mut f = AttitudeFilter::new(AttitudeConfig::default());
+        let mut f = AttitudeFilter::new(AttitudeConfig::standalone());
         f.update([0.0; 3], resting_accel(0.0, 0.0), 0.002).unwrap();
         for _ in 0..20_000 {
             f.update([0.0; 3], resting_accel(0.2, -0.1), 0.002).unwrap();
@@ -147,7 +179,7 @@ mod tests {
 
     #[test]
     fn follows_a_gyro_rotation_and_learns_a_constant_bias() {
-        let mut f = AttitudeFilter::new(AttitudeConfig::default());
+        let mut f = AttitudeFilter::new(AttitudeConfig::standalone());
         let bias = [0.02, -0.015, 0.0];
         // At rest, level, with a biased gyro: the bias is learned and the tilt stays near zero.
         for _ in 0..100_000 {
@@ -194,6 +226,20 @@ mod tests {
         }
         let (roll, pitch) = f.roll_pitch();
         assert_eq!((roll, pitch), (0.0, 0.0));
+    }
+
+    #[test]
+    fn tilt_correction_rotates_about_the_given_world_axis() {
+        let mut f = AttitudeFilter::new(AttitudeConfig::default());
+        f.update([0.0; 3], resting_accel(0.0, 0.0), 0.002).unwrap();
+        // Heading of the corrector is 90 degrees: its x axis is this filter's -y axis, so an
+        // error about its x is a rotation about -y here, i.e. negative pitch.
+        f.correct_tilt([0.05, 0.0], core::f32::consts::FRAC_PI_2);
+        let (roll, pitch) = f.roll_pitch();
+        assert!(
+            roll.abs() < 1e-5 && (pitch + 0.05).abs() < 1e-4,
+            "{roll} {pitch}"
+        );
     }
 
     #[test]

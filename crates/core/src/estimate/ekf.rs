@@ -2,17 +2,21 @@
 //! model goes through.
 //!
 //! State (world frame, f32): position (3), velocity (3), yaw, accelerometer bias (body, 3), gyro
-//! z bias, and a clone of (x, y, yaw) at the scan matcher's reference scan. The clone makes the
-//! matcher's *relative* pose change an ordinary measurement with correct correlations
-//! ("stochastic cloning"): the prediction is the current pose seen from the cloned one. Roll and
-//! pitch come from [`super::attitude`]; the biases kept are the ones that drift the hold point
+//! z bias, the tilt error of the attitude filter (2), and a clone of (x, y, yaw) at the scan
+//! matcher's reference scan. The clone makes the matcher's *relative* pose change an ordinary
+//! measurement with correct correlations ("stochastic cloning"): the prediction is the current
+//! pose seen from the cloned one. Roll and pitch come from [`super::attitude`]; the filter
+//! carries that estimate's small error about world x and y, because a multirotor's accelerometer
+//! sees mostly thrust and cannot tell tilt from acceleration, while the lidar can: a tilt error
+//! turns into a velocity error the scan matches reveal, and the estimator feeds the estimated
+//! error back into the tilt filter. The biases kept are the ones that drift the hold point
 //! (horizontal accelerometer bias), the height (vertical accelerometer bias) and the heading
 //! (gyro z bias).
 
 use nalgebra::{SMatrix, SVector};
 
 /// Number of states.
-pub const N: usize = 14;
+pub const N: usize = 16;
 /// Indices into the state vector.
 pub mod ix {
     pub const POS: usize = 0;
@@ -20,8 +24,10 @@ pub mod ix {
     pub const YAW: usize = 6;
     pub const ACCEL_BIAS: usize = 7;
     pub const GYRO_Z_BIAS: usize = 10;
+    /// Small-angle error of the tilt filter about world x and y (true = exp(error) * estimate).
+    pub const TILT: usize = 11;
     /// Clone of x, y and yaw at the reference scan.
-    pub const CLONE: usize = 11;
+    pub const CLONE: usize = 13;
 }
 
 pub type State = SVector<f32, N>;
@@ -34,6 +40,8 @@ pub struct EkfConfig {
     pub initial_std: [f32; 3],
     /// Initial one-sigma of accelerometer bias (m/s^2) and gyro z bias (rad/s).
     pub initial_bias_std: [f32; 2],
+    /// Initial one-sigma of the tilt filter's error (rad).
+    pub initial_tilt_std_rad: f32,
     /// Accelerometer white noise density (m/s^2/sqrt(Hz)), including what tilt-estimate error
     /// adds to the horizontal specific force.
     pub accel_noise_density: f32,
@@ -66,6 +74,7 @@ impl Default for EkfConfig {
         Self {
             initial_std: [0.05, 0.05, 0.05],
             initial_bias_std: [0.3, 0.01],
+            initial_tilt_std_rad: 0.02,
             accel_noise_density: 0.15,
             gyro_noise_density: 0.005,
             accel_bias_walk: 0.01,
@@ -153,6 +162,10 @@ impl Ekf {
         }
         p[(ix::YAW, ix::YAW)] = sy * sy;
         p[(ix::GYRO_Z_BIAS, ix::GYRO_Z_BIAS)] = sg * sg;
+        for i in 0..2 {
+            p[(ix::TILT + i, ix::TILT + i)] =
+                config.initial_tilt_std_rad * config.initial_tilt_std_rad;
+        }
         for i in 0..3 {
             p[(ix::CLONE + i, ix::CLONE + i)] = 1.0;
         }
@@ -181,6 +194,15 @@ impl Ekf {
         let var_xy = self.p[(ix::POS, ix::POS)].max(self.p[(ix::POS + 1, ix::POS + 1)]);
         let max = self.config.max_position_std_m;
         finite && var_xy >= 0.0 && var_xy <= max * max
+    }
+
+    /// Hands out the estimated tilt-filter error (about world x, y; rad) and zeroes it: the
+    /// caller applies it to the tilt filter (the error-state reset; covariance is kept).
+    pub fn take_tilt_error(&mut self) -> [f32; 2] {
+        let e = [self.x[ix::TILT], self.x[ix::TILT + 1]];
+        self.x[ix::TILT] = 0.0;
+        self.x[ix::TILT + 1] = 0.0;
+        e
     }
 
     /// Forgets what the filter knew about the given states: their correlations are cut and

@@ -104,6 +104,7 @@ impl Estimator {
                 (ix::YAW, sy * sy),
             ]);
         }
+        self.feed_back_tilt();
         outcome
     }
 
@@ -126,6 +127,7 @@ impl Estimator {
             outcome = self.ekf.fuse_sonar(&sonar, s.range_m, roll, pitch);
             self.counters.sonar.record(outcome);
         }
+        self.feed_back_tilt();
         outcome
     }
 
@@ -145,7 +147,15 @@ impl Estimator {
             outcome = self.ekf.fuse_at_rest(&self.config.at_rest);
             self.counters.at_rest.record(outcome);
         }
+        self.feed_back_tilt();
         outcome
+    }
+
+    /// Moves the EKF's tilt-error estimate into the tilt filter (error-state reset).
+    fn feed_back_tilt(&mut self) {
+        let heading = self.ekf.state()[ix::YAW];
+        let error = self.ekf.take_tilt_error();
+        self.attitude.correct_tilt(error, heading);
     }
 
     /// The estimate as the controllers and the log see it.
@@ -254,6 +264,18 @@ mod tests {
             };
             assert!(est.predict(&imu, dt));
             if k % 100 == 0 {
+                if seed == 2 && k % 500 == 0 {
+                    let x = est.ekf().state();
+                    std::println!(
+                        "t {t:.1} v {:.3} {:.3} rp {:?} bias {:.3} {:.3} {:.3}",
+                        x[ix::VEL],
+                        x[ix::VEL + 1],
+                        est.attitude.roll_pitch(),
+                        x[ix::ACCEL_BIAS],
+                        x[ix::ACCEL_BIAS + 1],
+                        x[ix::ACCEL_BIAS + 2]
+                    );
+                }
                 let m = scan(&mut rng, t as f64, truth, reference);
                 est.fuse_scan_match(&m);
                 reference = truth;

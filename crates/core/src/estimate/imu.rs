@@ -112,6 +112,13 @@ impl Ekf {
             }
         }
         f[(ix::YAW, ix::GYRO_Z_BIAS)] = -yaw_gain * dt;
+        // Tilt error phi: true specific force in the world is (I + [phi]x) R f, so
+        // d(v)/d(phi) = -[R f]x, for the x and y columns.
+        let u = world_specific;
+        f[(ix::VEL, ix::TILT + 1)] = u.z * dt;
+        f[(ix::VEL + 1, ix::TILT)] = -u.z * dt;
+        f[(ix::VEL + 2, ix::TILT)] = u.y * dt;
+        f[(ix::VEL + 2, ix::TILT + 1)] = -u.x * dt;
         self.p = f * self.p * f.transpose();
 
         let c = &self.config;
@@ -128,6 +135,8 @@ impl Ekf {
             self.p[(ix::ACCEL_BIAS + i, ix::ACCEL_BIAS + i)] += qba;
         }
         self.p[(ix::YAW, ix::YAW)] += qg;
+        self.p[(ix::TILT, ix::TILT)] += qg;
+        self.p[(ix::TILT + 1, ix::TILT + 1)] += qg;
         self.p[(ix::GYRO_Z_BIAS, ix::GYRO_Z_BIAS)] += qbg;
     }
 }

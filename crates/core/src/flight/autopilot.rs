@@ -42,6 +42,9 @@ pub struct LandingConfig {
     pub ground_height_m: f32,
     /// Longest step accepted (s); longer or non-positive steps are faults.
     pub max_dt_s: f32,
+    /// Collective below this fraction of hover counts as "low thrust" for touchdown detection
+    /// (a descent at the configured rates never asks for so little).
+    pub low_thrust_fraction: f32,
 }
 
 impl Default for LandingConfig {
@@ -51,6 +54,7 @@ impl Default for LandingConfig {
             critical_descent_m_s: 1.0,
             ground_height_m: 0.05,
             max_dt_s: 0.1,
+            low_thrust_fraction: 0.6,
         }
     }
 }
@@ -81,6 +85,8 @@ pub struct Autopilot {
     home: PositionSetpoint,
     mode: FlightMode,
     saturated: bool,
+    /// Last step's collective was below `landing.low_thrust_fraction` of hover.
+    low_thrust: bool,
     faults: FaultCounters,
     last: Outputs,
 }
@@ -96,6 +102,7 @@ impl Autopilot {
             home: PositionSetpoint::default(),
             mode: FlightMode::Disarmed,
             saturated: false,
+            low_thrust: false,
             faults: FaultCounters::default(),
             last: Outputs::default(),
         }
@@ -162,6 +169,7 @@ impl Autopilot {
             estimate,
             scan_accepted,
             battery_v,
+            low_thrust: self.low_thrust,
         };
         let mode = self.supervisor.update(&status);
         if mode != self.mode {
@@ -194,6 +202,8 @@ impl Autopilot {
         // ---- mix ----
         let motors = match demand {
             Some(d) => {
+                let hover = self.config.cascade.hover_collective;
+                self.low_thrust = d.collective < self.config.landing.low_thrust_fraction * hover;
                 let mixed = self.mixer.mix(d);
                 self.saturated = mixed.saturated;
                 if mixed.saturated {

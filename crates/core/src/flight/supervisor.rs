@@ -29,6 +29,10 @@ pub struct SupervisorConfig {
     pub touchdown_height_m: f32,
     pub touchdown_speed_m_s: f32,
     pub touchdown_s: f32,
+    /// Touchdown also when landing with thrust this long (s) at the controller's low limit:
+    /// the floor is holding the vehicle up, whatever the estimate says (an IMU that aliased
+    /// the touchdown shock can leave the filter believing it still moves).
+    pub low_thrust_s: f32,
 }
 
 impl Default for SupervisorConfig {
@@ -44,6 +48,7 @@ impl Default for SupervisorConfig {
             touchdown_height_m: 0.1,
             touchdown_speed_m_s: 0.2,
             touchdown_s: 0.5,
+            low_thrust_s: 1.0,
         }
     }
 }
@@ -58,6 +63,8 @@ pub struct Status {
     pub scan_accepted: bool,
     /// A finite battery reading arrived this step.
     pub battery_v: Option<f32>,
+    /// The controller asked for far less thrust than hover on the previous step.
+    pub low_thrust: bool,
 }
 
 /// Capacity of the event log.
@@ -77,6 +84,7 @@ pub struct Supervisor {
     battery_low: bool,
     battery_critical: bool,
     touchdown_since_t_s: Option<f64>,
+    low_thrust_since_t_s: Option<f64>,
     events: EventLog<EVENT_LOG_LEN>,
 }
 
@@ -93,6 +101,7 @@ impl Supervisor {
             battery_low: false,
             battery_critical: false,
             touchdown_since_t_s: None,
+            low_thrust_since_t_s: None,
             events: EventLog::default(),
         }
     }
@@ -223,17 +232,24 @@ impl Supervisor {
         if self.battery_critical {
             self.raise(s.t_s, FailsafeReason::BatteryCritical);
         }
-        let c = &self.config;
+        let c = self.config;
         let e = &s.estimate;
-        let down = e.position_m[2] < c.touchdown_height_m
+        let still_on_floor = e.position_m[2] < c.touchdown_height_m
             && libm::fabsf(e.velocity_m_s[2]) < c.touchdown_speed_m_s;
-        if !down {
+        let landed = held_for(
+            &mut self.touchdown_since_t_s,
+            still_on_floor,
+            s.t_s,
+            c.touchdown_s,
+        ) | held_for(
+            &mut self.low_thrust_since_t_s,
+            s.low_thrust,
+            s.t_s,
+            c.low_thrust_s,
+        );
+        if landed {
             self.touchdown_since_t_s = None;
-            return;
-        }
-        let since = *self.touchdown_since_t_s.get_or_insert(s.t_s);
-        if (s.t_s - since) as f32 >= c.touchdown_s {
-            self.touchdown_since_t_s = None;
+            self.low_thrust_since_t_s = None;
             self.set_mode(s.t_s, FlightMode::Disarmed);
         }
     }
@@ -244,19 +260,14 @@ impl Supervisor {
         let Some(v) = s.battery_v else {
             return;
         };
-        let debounce = self.config.battery_debounce_s;
-        let t = s.t_s;
-        let held = |since: &mut Option<f64>, below: bool| -> bool {
-            if !below {
-                *since = None;
-                return false;
-            }
-            (t - *since.get_or_insert(t)) as f32 >= debounce
-        };
-        self.battery_low |= held(&mut self.low_since_t_s, v < self.config.battery_low_v);
-        self.battery_critical |= held(
+        let c = self.config;
+        let (t, debounce) = (s.t_s, c.battery_debounce_s);
+        self.battery_low |= held_for(&mut self.low_since_t_s, v < c.battery_low_v, t, debounce);
+        self.battery_critical |= held_for(
             &mut self.critical_since_t_s,
-            v < self.config.battery_critical_v,
+            v < c.battery_critical_v,
+            t,
+            debounce,
         );
         if self.mode == FlightMode::Disarmed && v >= self.config.battery_low_v {
             self.battery_low = false;
@@ -285,6 +296,15 @@ impl Supervisor {
     }
 }
 
+/// True once `condition` has held continuously for `secs`; `since` remembers when it began.
+fn held_for(since: &mut Option<f64>, condition: bool, t_s: f64, secs: f32) -> bool {
+    if !condition {
+        *since = None;
+        return false;
+    }
+    (t_s - *since.get_or_insert(t_s)) as f32 >= secs
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -298,6 +318,7 @@ mod tests {
         valid: bool,
         lidar: bool,
         battery_v: f32,
+        low_thrust: bool,
     }
 
     impl Script {
@@ -310,6 +331,7 @@ mod tests {
                 valid: true,
                 lidar: true,
                 battery_v: 12.0,
+                low_thrust: false,
             }
         }
 
@@ -330,6 +352,7 @@ mod tests {
                     estimate,
                     scan_accepted: self.lidar && tick.is_multiple_of(20),
                     battery_v: Some(self.battery_v),
+                    low_thrust: self.low_thrust,
                 });
             }
             self.sup.mode()
@@ -365,6 +388,18 @@ mod tests {
         use FlightMode::*;
         assert_eq!(modes, [Takeoff, Hold, Land, Disarmed]);
         assert_eq!(s.sup.failsafe(), None);
+    }
+
+    #[test]
+    fn landing_on_low_thrust_disarms_even_with_a_wrong_height() {
+        let mut s = Script::new();
+        s.climb_to_hold();
+        s.pilot.arm = false;
+        assert_eq!(s.run(0.1), FlightMode::Land);
+        // The estimate insists on 1 m, but the controller has been at its low limit for 1 s.
+        s.low_thrust = true;
+        assert_eq!(s.run(0.9), FlightMode::Land);
+        assert_eq!(s.run(0.2), FlightMode::Disarmed);
     }
 
     #[test]
