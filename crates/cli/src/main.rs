@@ -8,6 +8,8 @@ mod log_args;
 mod odometry_cmd;
 mod plot;
 mod report;
+mod sim_cmd;
+mod sim_plot;
 
 #[derive(Parser)]
 #[command(name = "plumbline", version, about = "Indoor lidar navigation and flight control for quadcopters")]
@@ -24,6 +26,8 @@ enum Command {
     Eval(eval_cmd::EvalArgs),
     /// Lidar devices: decode raw captures, record from a serial port, plot a revolution.
     Lidar(lidar_cmd::LidarArgs),
+    /// Fly the simulator: emulated lidar/IMU/sonar logs with exact ground truth.
+    Sim(sim_cmd::SimArgs),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +36,7 @@ fn main() -> ExitCode {
         Command::Odometry(args) => odometry_cmd::run(args),
         Command::Eval(args) => eval_cmd::run(args),
         Command::Lidar(args) => lidar_cmd::run(args),
+        Command::Sim(args) => sim_cmd::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -144,7 +144,7 @@ impl Dynamics {
     fn non_gravity_force(&self, s: &BodyState, f: &Forcing, thrust: f64) -> Vec3 {
         let air = s.velocity - f.wind;
         let drag = air * -(self.drag_linear + self.drag_quadratic * air.norm());
-        s.attitude.rotate(Vec3::Z * thrust) + drag + f.force
+        s.attitude.z_axis() * thrust + drag + f.force
     }
 
     /// The time derivative of the state (seed 002 eqs. 13-19 and the motor model).
@@ -163,7 +163,9 @@ impl Dynamics {
             thrust += tau;
             // Differential thrust (eq. 16) and hub yawing moment (eq. 15): the air drags the
             // rotor against its spin, the body feels the reaction.
-            moment += rotor.position_m.cross(Vec3::Z * tau);
+            // r × (0, 0, τ) = (y τ, -x τ, 0).
+            moment.x += rotor.position_m.y * tau;
+            moment.y -= rotor.position_m.x * tau;
             moment.z -= rotor.spin * self.moment_coeff * w2;
             rotor_momentum += rotor.spin * self.rotor_inertia * s.rotor_speed[i];
             rotor_momentum_rate += rotor.spin * self.rotor_inertia * d.rotor_speed[i];

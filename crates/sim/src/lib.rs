@@ -13,5 +13,6 @@ pub mod rng;
 pub mod runner;
 pub mod scene;
 pub mod sensors;
+pub mod truth;
 pub mod vehicle;
 pub mod world;

@@ -148,6 +148,16 @@ impl Quat {
         v + t * self.w + u.cross(t)
     }
 
+    /// The body z axis in the world frame (the thrust direction), cheaper than `rotate(Z)`.
+    pub fn z_axis(self) -> Vec3 {
+        let Quat { w, x, y, z } = self;
+        Vec3::new(
+            2.0 * (x * z + w * y),
+            2.0 * (y * z - w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        )
+    }
+
     /// Rotates a world vector into the body frame.
     pub fn rotate_inv(self, v: Vec3) -> Vec3 {
         self.conj().rotate(v)
@@ -227,6 +237,7 @@ mod tests {
         let v = Quat::from_euler(0.0, 0.0, core::f64::consts::FRAC_PI_2)
             .rotate(Vec3::new(1.0, 0.0, 0.0));
         assert!((v.x).abs() < 1e-12 && (v.y - 1.0).abs() < 1e-12);
+        assert!((q.z_axis() - q.rotate(Vec3::Z)).norm() < 1e-12);
         let back = q.rotate_inv(q.rotate(Vec3::new(0.3, -1.0, 2.0)));
         assert!((back - Vec3::new(0.3, -1.0, 2.0)).norm() < 1e-12);
     }

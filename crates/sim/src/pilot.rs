@@ -103,7 +103,7 @@ impl TestPilot {
             + (r.velocity - s.velocity) * self.vel_gain
             + self.integral * self.int_gain
             + r.acceleration;
-        let h = acc.x.hypot(acc.y);
+        let h = (acc.x * acc.x + acc.y * acc.y).sqrt();
         if h > self.max_tilt_accel {
             acc.x *= self.max_tilt_accel / h;
             acc.y *= self.max_tilt_accel / h;

@@ -119,6 +119,8 @@ pub enum Pilot {
 const TEST_PILOT_HZ: f64 = 500.0;
 /// Rate of collision checks, gust updates and people motion, Hz.
 const SLOW_HZ: f64 = 100.0;
+/// Clearance is searched only this far (grid cells around the vehicle), m.
+pub const CLEARANCE_CAP_M: f64 = 2.0;
 /// Touching down faster than this breaks the vehicle, m/s.
 const MAX_LANDING_SPEED_MPS: f64 = 2.0;
 
@@ -146,6 +148,7 @@ pub struct Outcome {
     pub battery_end_soc: f64,
     /// First time the loaded pack voltage fell below the low threshold, s.
     pub battery_low_at_s: Option<f64>,
+    /// Smallest distance from the centre to a wall, capped at [`CLEARANCE_CAP_M`].
     pub min_clearance_m: f64,
     /// Horizontal distance from the plan's reference while airborne (test pilot only), m.
     pub rms_hold_error_m: Option<f64>,
@@ -289,7 +292,7 @@ pub fn run(
                 g.advance(slow_every as f64 * dt);
             }
             people_at(walkers, t, &mut people);
-            let c = scene.clearance([s.position.x, s.position.y], 5.0);
+            let c = scene.clearance([s.position.x, s.position.y], CLEARANCE_CAP_M);
             out.min_clearance_m = out.min_clearance_m.min(c);
             if c < v.radius_m {
                 out.status = Status::Crashed {
@@ -312,7 +315,8 @@ pub fn run(
                 Pilot::Test(plan) => {
                     let r = plan.at(t);
                     if r.position.z > 0.3 {
-                        let e = (r.position.x - s.position.x).hypot(r.position.y - s.position.y);
+                        let (ex, ey) = (r.position.x - s.position.x, r.position.y - s.position.y);
+                        let e = (ex * ex + ey * ey).sqrt();
                         err2_sum += e * e;
                         err_n += 1;
                         err_max = err_max.max(e);

@@ -169,36 +169,43 @@ impl Scene {
         };
         let (sx, mut next_x, dtx) = axis(gx, d.x / cell, cx);
         let (sy, mut next_y, dty) = axis(gy, d.y / cell, cy);
-        let mut best: Option<Hit> = None;
+        let mut best: Option<usize> = None;
         let mut best_t = limit;
+        let found = |best: Option<usize>, t: f64| {
+            best.map(|i| {
+                let s = &self.walls[i];
+                let (ex, ey) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
+                Hit {
+                    range_m: t,
+                    cos_incidence: (d.x * ey - d.y * ex).abs() / (ex * ex + ey * ey).sqrt(),
+                }
+            })
+        };
         loop {
             let c = cy * self.nx + cx;
             for &i in &self.items[self.starts[c] as usize..self.starts[c + 1] as usize] {
-                if let Some((t, cos)) = hit_segment(o, d, &self.walls[i as usize]) {
+                if let Some(t) = hit_segment(o, d, &self.walls[i as usize]) {
                     if t < best_t {
                         best_t = t;
-                        best = Some(Hit {
-                            range_m: t,
-                            cos_incidence: cos,
-                        });
+                        best = Some(i as usize);
                     }
                 }
             }
             let leave = next_x.min(next_y);
             if best_t <= leave || leave > t1 {
-                return best;
+                return found(best, best_t);
             }
             if next_x < next_y {
                 let n = cx as i64 + sx;
                 if n < 0 || n >= self.nx as i64 {
-                    return best;
+                    return found(best, best_t);
                 }
                 cx = n as usize;
                 next_x += dtx;
             } else {
                 let n = cy as i64 + sy;
                 if n < 0 || n >= self.ny as i64 {
-                    return best;
+                    return found(best, best_t);
                 }
                 cy = n as usize;
                 next_y += dty;
@@ -233,21 +240,23 @@ impl Scene {
     }
 }
 
-/// Ray (3-D, walls are vertical) against a wall segment: distance and incidence cosine.
-fn hit_segment(o: Vec3, d: Vec3, s: &Segment) -> Option<(f64, f64)> {
+/// Ray (3-D, walls are vertical) against a wall segment: distance along the ray.
+fn hit_segment(o: Vec3, d: Vec3, s: &Segment) -> Option<f64> {
     let (ex, ey) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
     let denom = d.x * ey - d.y * ex;
-    if denom == 0.0 {
-        return None;
-    }
     let (ax, ay) = (s.a[0] - o.x, s.a[1] - o.y);
-    let t = (ax * ey - ay * ex) / denom;
-    let u = (ax * d.y - ay * d.x) / denom;
-    if t < 0.0 || !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let len = ex.hypot(ey);
-    Some((t, denom.abs() / len))
+    // t = t_num / denom must be >= 0 and u = u_num / denom in [0, 1]: compared by sign so that
+    // the one division happens only for actual hits (this is the inner loop of every beam).
+    let t_num = ax * ey - ay * ex;
+    let u_num = ax * d.y - ay * d.x;
+    let hit = if denom > 0.0 {
+        t_num >= 0.0 && u_num >= 0.0 && u_num <= denom
+    } else if denom < 0.0 {
+        t_num <= 0.0 && u_num <= 0.0 && u_num >= denom
+    } else {
+        false
+    };
+    hit.then(|| t_num / denom)
 }
 
 /// Ray against a vertical cylinder standing on the floor.
@@ -317,7 +326,7 @@ mod tests {
     fn reference(w: &World, o: Vec3, d: Vec3, max: f64) -> Option<f64> {
         let mut best = max;
         for s in &w.walls {
-            if let Some((t, _)) = hit_segment(o, d, s) {
+            if let Some(t) = hit_segment(o, d, s) {
                 best = best.min(t);
             }
         }

@@ -26,7 +26,8 @@ impl Segment {
         } else {
             0.0
         };
-        (px - u * ex).hypot(py - u * ey)
+        let (dx, dy) = (px - u * ex, py - u * ey);
+        (dx * dx + dy * dy).sqrt()
     }
 }
 

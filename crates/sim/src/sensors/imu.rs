@@ -38,6 +38,9 @@ impl ImuParams {
     }
 }
 
+/// Samples between bias random-walk updates.
+const BIAS_EVERY: u64 = 10;
+
 /// An IMU in flight.
 #[derive(Clone, Debug)]
 pub struct Imu {
@@ -46,6 +49,7 @@ pub struct Imu {
     gyro_bias: Vec3,
     accel_bias: Vec3,
     next_s: f64,
+    count: u64,
 }
 
 fn gauss3(rng: &mut Rng, sigma: f64) -> Vec3 {
@@ -62,6 +66,7 @@ impl Imu {
             gyro_bias,
             accel_bias,
             next_s: 0.0,
+            count: 0,
         }
     }
 
@@ -75,8 +80,14 @@ impl Imu {
         let dt = 1.0 / p.rate_hz;
         self.next_s += dt;
         let root_rate = p.rate_hz.sqrt();
-        self.gyro_bias += gauss3(&mut self.rng, p.gyro_bias_walk * dt.sqrt());
-        self.accel_bias += gauss3(&mut self.rng, p.accel_bias_walk * dt.sqrt());
+        // The biases walk in steps of BIAS_EVERY samples: the same variance growth (σ² t) for a
+        // sixth of the random draws.
+        self.count += 1;
+        if self.count.is_multiple_of(BIAS_EVERY) {
+            let step = (BIAS_EVERY as f64 * dt).sqrt();
+            self.gyro_bias += gauss3(&mut self.rng, p.gyro_bias_walk * step);
+            self.accel_bias += gauss3(&mut self.rng, p.accel_bias_walk * step);
+        }
         let g = rate + self.gyro_bias + gauss3(&mut self.rng, p.gyro_noise_density * root_rate);
         let a = specific_force
             + self.accel_bias

@@ -1,0 +1,343 @@
+//! `plumbline sim`: closed-loop flight in the simulator, writing the emulated sensor logs and the
+//! ground truth in the benchmark formats (DESIGN.md §4, §5).
+
+use crate::report::{print_summary, progress, CliError, CliResult};
+use crate::sim_plot;
+use clap::Args;
+use indicatif::ProgressBar;
+use plumbline_core::msgs::{ImuSample, SonarSample};
+use plumbline_io::carmen::{write_robotlaser1, LaserRecord};
+use plumbline_sim::disturb::Push;
+use plumbline_sim::math::Vec3;
+use plumbline_sim::plan::{Plan, PlanLimits};
+use plumbline_sim::runner::{
+    self, Outcome, Pilot, Recorder, SimConfig, StateSample, Status, TruthPose,
+};
+use plumbline_sim::sensors::lidar::{LidarProfile, LidarScan};
+use plumbline_sim::truth::relations;
+use plumbline_sim::vehicle::VehicleParams;
+use plumbline_sim::world::World;
+use serde_json::json;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Args, Debug)]
+pub struct SimArgs {
+    /// A shipped world (room, office, building) or a world file (crates/sim/WORLDS.md).
+    #[arg(long, default_value = "office")]
+    pub world: String,
+    /// What to fly: `survey` (the world's path) or `hold` (hover over the start).
+    #[arg(long, default_value = "survey", value_parser = ["survey", "hold"])]
+    pub scenario: String,
+    #[arg(long, default_value = "xv11", value_parser = ["xv11", "urg04lx", "utm30lx"])]
+    pub lidar: String,
+    /// Vehicle preset (f450, pelican) or a TOML file (`base = "..."` plus overrides).
+    #[arg(long, default_value = "f450")]
+    pub vehicle: String,
+    /// Hold length for `hold`; an upper bound on the flight for `survey`, s.
+    #[arg(long)]
+    pub duration: Option<f64>,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Physics rate, Hz (fixed-step RK4).
+    #[arg(long, default_value_t = 1000.0)]
+    pub physics_hz: f64,
+    /// Turn off turbulence.
+    #[arg(long)]
+    pub no_gusts: bool,
+    /// Leave the world's walking people out.
+    #[arg(long)]
+    pub no_people: bool,
+    /// A push on the frame: `START,DURATION,FX,FY,FZ` (s, s, N world frame); repeatable.
+    #[arg(long, value_parser = parse_push)]
+    pub push: Vec<Push>,
+    /// Write scans.clf, imu.csv, sonar.csv, truth.txt, truth.relations, summary.json and plots.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn parse_push(s: &str) -> Result<Push, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|e| format!("`{x}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [start_s, duration_s, fx, fy, fz]
+            if v.iter().all(|x| x.is_finite()) && duration_s >= 0.0 =>
+        {
+            Ok(Push {
+                start_s,
+                duration_s,
+                force_n: Vec3::new(fx, fy, fz),
+            })
+        }
+        _ => Err("expected START,DURATION,FX,FY,FZ (five finite numbers, duration >= 0)".into()),
+    }
+}
+
+fn load_world(arg: &str) -> Result<World, CliError> {
+    if let Some(w) = World::shipped(arg) {
+        return w.map_err(|e| CliError(format!("shipped world {arg}: {e}")));
+    }
+    let text = std::fs::read_to_string(arg).map_err(|e| {
+        CliError(format!(
+            "{arg}: {e} (shipped worlds: room, office, building)"
+        ))
+    })?;
+    World::parse(&text).map_err(|e| CliError(format!("{arg}: {e}")))
+}
+
+fn load_vehicle(arg: &str) -> Result<VehicleParams, CliError> {
+    if let Some(v) = VehicleParams::preset(arg) {
+        return Ok(v);
+    }
+    let text = std::fs::read_to_string(arg)
+        .map_err(|e| CliError(format!("{arg}: {e} (presets: f450, pelican)")))?;
+    VehicleParams::from_toml(&text).map_err(|e| CliError(format!("{arg}: {e}")))
+}
+
+/// Streams the outputs into DIR as they are produced.
+struct Files {
+    clf: BufWriter<File>,
+    imu: BufWriter<File>,
+    sonar: BufWriter<File>,
+    truth: BufWriter<File>,
+    poses: Vec<TruthPose>,
+}
+
+/// Keeps the plotted series and the first write error; drives the progress bar.
+struct Collector {
+    files: Option<Files>,
+    states: Vec<StateSample>,
+    bar: ProgressBar,
+    error: Option<std::io::Error>,
+}
+
+impl Collector {
+    fn keep(&mut self, r: std::io::Result<()>) {
+        if let Err(e) = r {
+            self.error.get_or_insert(e);
+        }
+    }
+}
+
+fn stamp(t_s: f64) -> String {
+    format!("{t_s:.6}")
+}
+
+impl Recorder for Collector {
+    fn scan(&mut self, scan: &LidarScan, truth: &TruthPose) {
+        let Some(f) = self.files.as_mut() else { return };
+        let mut rec = LaserRecord::new(
+            scan.stamp_s,
+            scan.start_angle_rad as f32,
+            scan.increment_rad as f32,
+            scan.max_range_m as f32,
+            scan.ranges_m.clone(),
+        );
+        rec.valid.clone_from(&scan.valid);
+        rec.timestamp_text = stamp(scan.stamp_s);
+        let r = write_robotlaser1(&mut f.clf, &rec, "plumbline-sim").and_then(|_| {
+            let p = truth.position;
+            writeln!(
+                f.truth,
+                "{} {:.6} {:.6} {:.6}",
+                rec.timestamp_text,
+                p.x,
+                p.y,
+                truth.attitude.yaw()
+            )
+        });
+        f.poses.push(*truth);
+        self.keep(r);
+    }
+
+    fn imu(&mut self, s: &ImuSample) {
+        let Some(f) = self.files.as_mut() else { return };
+        let (g, a) = (s.gyro_rad_s, s.accel_m_s2);
+        let r = writeln!(
+            f.imu,
+            "{:.6},{},{},{},{},{},{}",
+            s.t_s, g[0], g[1], g[2], a[0], a[1], a[2]
+        );
+        self.keep(r);
+    }
+
+    fn sonar(&mut self, s: &SonarSample) {
+        let Some(f) = self.files.as_mut() else { return };
+        let r = writeln!(f.sonar, "{:.6},{}", s.t_s, s.range_m);
+        self.keep(r);
+    }
+
+    fn state(&mut self, s: &StateSample) {
+        self.states.push(*s);
+        self.bar.set_position(s.t_s as u64);
+    }
+}
+
+fn create(dir: &Path, name: &str) -> Result<BufWriter<File>, CliError> {
+    let path = dir.join(name);
+    File::create(&path)
+        .map(BufWriter::new)
+        .map_err(|e| CliError(format!("{}: {e}", path.display())))
+}
+
+fn open_files(dir: &Path) -> Result<Files, CliError> {
+    std::fs::create_dir_all(dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
+    let mut imu = create(dir, "imu.csv")?;
+    let mut sonar = create(dir, "sonar.csv")?;
+    writeln!(
+        imu,
+        "t_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2"
+    )?;
+    writeln!(sonar, "t_s,range_m")?;
+    Ok(Files {
+        clf: create(dir, "scans.clf")?,
+        imu,
+        sonar,
+        truth: create(dir, "truth.txt")?,
+        poses: Vec::new(),
+    })
+}
+
+fn finish_files(dir: &Path, mut f: Files) -> Result<(), CliError> {
+    let mut rel = create(dir, "truth.relations")?;
+    for r in relations(&f.poses, 10.0) {
+        let t = r.translation;
+        writeln!(
+            rel,
+            "{} {} {:.6} {:.6} {:.6} {:.6} {:.6} {:.6}",
+            stamp(r.t1_s),
+            stamp(r.t2_s),
+            t.x,
+            t.y,
+            t.z,
+            r.roll,
+            r.pitch,
+            r.yaw
+        )?;
+    }
+    for w in [&mut f.clf, &mut f.imu, &mut f.sonar, &mut f.truth, &mut rel] {
+        w.flush()?;
+    }
+    Ok(())
+}
+
+fn summary(args: &SimArgs, config: &SimConfig, out: &Outcome, wall_s: f64) -> serde_json::Value {
+    let (status, status_time) = match &out.status {
+        Status::Completed => ("completed".to_string(), None),
+        Status::Crashed { t_s, reason } => (format!("crashed: {reason}"), Some(*t_s)),
+        Status::Diverged { t_s } => ("diverged".to_string(), Some(*t_s)),
+        Status::BatteryExhausted { t_s } => ("battery exhausted".to_string(), Some(*t_s)),
+    };
+    let [motors, escs, avionics] = out.energy.fractions();
+    json!({
+        "world": config.world.name,
+        "scenario": args.scenario,
+        "lidar": config.lidar.name,
+        "vehicle": config.vehicle.name,
+        "seed": config.seed,
+        "physics_hz": config.physics_hz,
+        "status": status,
+        "status_time_s": status_time,
+        "crashed": matches!(out.status, Status::Crashed { .. }),
+        "sim_seconds": out.sim_seconds,
+        "wall_seconds": wall_s,
+        "realtime_factor": out.sim_seconds / wall_s.max(1e-9),
+        "scans": out.scans,
+        "distance_flown_m": out.distance_flown_m,
+        "rms_hold_error_m": out.rms_hold_error_m,
+        "max_hold_error_m": out.max_hold_error_m,
+        "estimate_drift_m": null,
+        "min_clearance_m": out.min_clearance_m,
+        "energy_wh": out.energy.total_wh(),
+        "battery_energy_wh": out.battery_energy_wh,
+        "power_fraction": { "motors": motors, "escs": escs, "avionics": avionics },
+        "battery_end_v": out.battery_end_v,
+        "battery_min_v": out.battery_min_v,
+        "battery_end_soc": out.battery_end_soc,
+        "battery_low_s": out.battery_low_at_s,
+    })
+}
+
+pub fn run(args: SimArgs) -> CliResult {
+    let world = load_world(&args.world)?;
+    let lidar = LidarProfile::by_name(&args.lidar)
+        .ok_or_else(|| CliError(format!("unknown lidar {}", args.lidar)))?;
+    let mut config = SimConfig::new(world, lidar, args.seed);
+    config.vehicle = load_vehicle(&args.vehicle)?;
+    config.physics_hz = args.physics_hz;
+    config.pushes.clone_from(&args.push);
+    config.people = !args.no_people;
+    if args.no_gusts {
+        config.gusts = None;
+    }
+    if let Some(d) = args.duration {
+        if !(d.is_finite() && d > 0.0) {
+            return Err(CliError(format!("--duration must be positive, got {d}")));
+        }
+    }
+    let limits = PlanLimits::default();
+    let plan = match args.scenario.as_str() {
+        "hold" => Plan::hold(&config.world, limits, args.duration.unwrap_or(30.0)),
+        _ => {
+            if config.world.path.is_empty() {
+                return Err(CliError(format!(
+                    "world {} has no survey path",
+                    config.world.name
+                )));
+            }
+            config.max_duration_s = args.duration.unwrap_or(config.max_duration_s);
+            Plan::survey(&config.world, limits)
+        }
+    };
+    for p in &config.world.path {
+        config
+            .world
+            .check_free(*p, config.vehicle.radius_m, "survey waypoint")
+            .map_err(|e| CliError(format!("{}: {e}", args.world)))?;
+    }
+    let files = args.out.as_deref().map(open_files).transpose()?;
+    let bar = progress(
+        plan.duration_s().min(config.max_duration_s).ceil() as u64,
+        "sim",
+    );
+    let mut collector = Collector {
+        files,
+        states: Vec::new(),
+        bar,
+        error: None,
+    };
+    let started = Instant::now();
+    let out = runner::run(&config, Pilot::Test(plan), &mut collector)
+        .map_err(|e| CliError(format!("{}: {e}", args.world)))?;
+    let wall_s = started.elapsed().as_secs_f64();
+    collector.bar.finish_and_clear();
+    if let Some(e) = collector.error.take() {
+        return Err(CliError(format!("writing outputs: {e}")));
+    }
+    let summary = summary(&args, &config, &out, wall_s);
+    if let (Some(dir), Some(files)) = (args.out.as_deref(), collector.files.take()) {
+        let poses = files.poses.clone();
+        finish_files(dir, files)?;
+        sim_plot::top_view(
+            &dir.join("top.png"),
+            &config.world,
+            &collector.states,
+            &poses,
+        )
+        .map_err(|e| CliError(format!("top.png: {e}")))?;
+        sim_plot::time_series(&dir.join("flight.png"), &collector.states)
+            .map_err(|e| CliError(format!("flight.png: {e}")))?;
+        let text = serde_json::to_string_pretty(&summary).map_err(|e| CliError(e.to_string()))?;
+        std::fs::write(dir.join("summary.json"), text + "\n")
+            .map_err(|e| CliError(format!("summary.json: {e}")))?;
+    }
+    print_summary(&summary, args.json);
+    Ok(())
+}

@@ -1,0 +1,171 @@
+//! Plots of a simulated flight: the world from above with the flown path, and altitude,
+//! attitude and battery over time.
+
+use crate::plot::fonts_available;
+use plotters::prelude::*;
+use plumbline_sim::runner::{StateSample, TruthPose};
+use plumbline_sim::world::World;
+use std::error::Error;
+use std::path::Path;
+
+/// Walls in black, people's walks in orange, reference dashed grey, flown path in red, scan
+/// positions as blue dots.
+pub fn top_view(
+    path: &Path,
+    world: &World,
+    states: &[StateSample],
+    scans: &[TruthPose],
+) -> Result<(), Box<dyn Error>> {
+    let [x0, y0, x1, y1] = world.bounds();
+    let (w, h) = (x1 - x0, y1 - y0);
+    let px = 1000u32;
+    let py = ((px as f64 * h / w.max(1e-3)).round() as u32).clamp(200, 2000);
+    let root = BitMapBackend::new(path, (px, py)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let labels = fonts_available();
+    let mut builder = ChartBuilder::on(&root);
+    builder.margin(10);
+    if labels {
+        builder
+            .caption(
+                format!("{}: walls and flown path (m)", world.name),
+                ("sans-serif", 20),
+            )
+            .x_label_area_size(30)
+            .y_label_area_size(40);
+    }
+    let m = 0.5;
+    let mut chart = builder.build_cartesian_2d(x0 - m..x1 + m, y0 - m..y1 + m)?;
+    if labels {
+        chart.configure_mesh().disable_mesh().draw()?;
+    }
+    for s in &world.walls {
+        chart.draw_series(LineSeries::new(
+            [(s.a[0], s.a[1]), (s.b[0], s.b[1])],
+            BLACK.stroke_width(2),
+        ))?;
+    }
+    let orange = RGBColor(230, 140, 20);
+    for p in &world.walkers {
+        chart.draw_series(LineSeries::new(
+            [(p.from[0], p.from[1]), (p.to[0], p.to[1])],
+            orange.stroke_width(3),
+        ))?;
+    }
+    let reference: Vec<(f64, f64)> = states
+        .iter()
+        .filter_map(|s| s.reference.map(|r| (r.x, r.y)))
+        .collect();
+    chart.draw_series(LineSeries::new(
+        reference,
+        RGBColor(160, 160, 160).stroke_width(1),
+    ))?;
+    chart.draw_series(LineSeries::new(
+        states.iter().map(|s| (s.position.x, s.position.y)),
+        RED.stroke_width(2),
+    ))?;
+    chart.draw_series(
+        scans
+            .iter()
+            .map(|t| Circle::new((t.position.x, t.position.y), 2, BLUE.filled())),
+    )?;
+    root.present()?;
+    Ok(())
+}
+
+/// Three stacked panels: altitude (m), roll/pitch/yaw (deg), battery voltage (V).
+pub fn time_series(path: &Path, states: &[StateSample]) -> Result<(), Box<dyn Error>> {
+    let root = BitMapBackend::new(path, (1200, 900)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let panels = root.split_evenly((3, 1));
+    let t_end = states.last().map_or(1.0, |s| s.t_s).max(1e-3);
+    let labels = fonts_available();
+    type Series<'a> = Vec<(&'a str, RGBColor, Vec<(f64, f64)>)>;
+    let series: [(&str, Series); 3] = [
+        (
+            "altitude (m)",
+            vec![(
+                "z",
+                RED,
+                states.iter().map(|s| (s.t_s, s.position.z)).collect(),
+            )],
+        ),
+        (
+            "attitude (deg)",
+            vec![
+                (
+                    "roll",
+                    RED,
+                    states
+                        .iter()
+                        .map(|s| (s.t_s, s.euler[0].to_degrees()))
+                        .collect(),
+                ),
+                (
+                    "pitch",
+                    GREEN,
+                    states
+                        .iter()
+                        .map(|s| (s.t_s, s.euler[1].to_degrees()))
+                        .collect(),
+                ),
+                (
+                    "yaw",
+                    BLUE,
+                    states
+                        .iter()
+                        .map(|s| (s.t_s, s.euler[2].to_degrees()))
+                        .collect(),
+                ),
+            ],
+        ),
+        (
+            "battery (V)",
+            vec![(
+                "V",
+                BLACK,
+                states.iter().map(|s| (s.t_s, s.battery_v)).collect(),
+            )],
+        ),
+    ];
+    for (area, (title, lines)) in panels.iter().zip(series) {
+        let (lo, hi) = lines
+            .iter()
+            .flat_map(|l| l.2.iter().map(|p| p.1))
+            .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+        let (lo, hi) = if lo > hi {
+            (0.0, 1.0)
+        } else {
+            (lo - 0.05 * (hi - lo + 1e-3), hi + 0.05 * (hi - lo + 1e-3))
+        };
+        let mut builder = ChartBuilder::on(area);
+        builder.margin(8);
+        if labels {
+            builder
+                .caption(title, ("sans-serif", 16))
+                .x_label_area_size(25)
+                .y_label_area_size(50);
+        }
+        let mut chart = builder.build_cartesian_2d(0.0..t_end, lo..hi)?;
+        if labels {
+            chart.configure_mesh().x_desc("t (s)").draw()?;
+        }
+        for (name, color, pts) in lines {
+            let drawn = chart.draw_series(LineSeries::new(pts, color.stroke_width(1)))?;
+            if labels {
+                drawn
+                    .label(name)
+                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 15, y)], color));
+            }
+        }
+        if labels {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()?;
+        }
+    }
+    root.present()?;
+    Ok(())
+}

@@ -1,0 +1,77 @@
+//! Simulator speed (issue 3 targets): the real-time factor of the office survey with the XV-11
+//! at 1 kHz physics, and ray casting against a 200-wall world.
+//!
+//! Criterion reports throughput: for `survey` the elements are physics steps (1 ms each), so the
+//! real-time factor is elements per second / 1000; for `rays` the elements are rays.
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use plumbline_sim::math::Vec3;
+use plumbline_sim::plan::{Plan, PlanLimits};
+use plumbline_sim::runner::{run, Discard, Pilot, SimConfig};
+use plumbline_sim::scene::Scene;
+use plumbline_sim::sensors::lidar::LidarProfile;
+use plumbline_sim::world::World;
+use std::hint::black_box;
+
+fn survey(c: &mut Criterion) {
+    let world = World::shipped("office").unwrap().unwrap();
+    let config = SimConfig::new(world, LidarProfile::xv11(), 7);
+    let plan = Plan::survey(&config.world, PlanLimits::default());
+    let steps = run(&config, Pilot::Test(plan.clone()), &mut Discard)
+        .unwrap()
+        .physics_steps;
+    let mut g = c.benchmark_group("survey");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(steps));
+    g.bench_function("office_xv11_1khz", |b| {
+        b.iter(|| run(&config, Pilot::Test(plan.clone()), &mut Discard).unwrap())
+    });
+    g.finish();
+}
+
+/// A 10 x 10 grid of 4 m rooms: 2 x 10 x 10 walls, each a room side with a 1 m door gap.
+fn grid_world() -> World {
+    let mut text = String::from("start 2 2 0\nceiling 2.5\n");
+    for i in 0..10 {
+        for j in 0..10 {
+            let (x, y) = (i as f64 * 4.0, j as f64 * 4.0);
+            text += &format!("wall {x} {y} {} {y}\n", x + 3.0);
+            text += &format!("wall {x} {y} {x} {}\n", y + 3.0);
+        }
+    }
+    World::parse(&text).unwrap()
+}
+
+fn rays(c: &mut Criterion) {
+    let world = grid_world();
+    assert_eq!(world.walls.len(), 200);
+    let scene = Scene::new(&world);
+    let origins: Vec<Vec3> = (0..64)
+        .map(|k| Vec3::new(1.0 + (k % 8) as f64 * 4.7, 1.5 + (k / 8) as f64 * 4.3, 1.0))
+        .collect();
+    let dirs: Vec<Vec3> = (0..360)
+        .map(|b| {
+            let (s, c) = (b as f64).to_radians().sin_cos();
+            Vec3::new(c * 0.999, s * 0.999, -0.0447)
+        })
+        .collect();
+    let mut g = c.benchmark_group("rays");
+    g.throughput(Throughput::Elements((origins.len() * dirs.len()) as u64));
+    for (name, range) in [("200_walls_4m", 4.0), ("200_walls_30m", 30.0)] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let mut sum = 0.0;
+                for o in &origins {
+                    for d in &dirs {
+                        sum += scene.cast(*o, *d, range, &[]).map_or(0.0, |h| h.range_m);
+                    }
+                }
+                black_box(sum)
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, survey, rays);
+criterion_main!(benches);
