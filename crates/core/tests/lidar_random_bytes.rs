@@ -163,3 +163,37 @@ fn rplidar_random_bytes_never_panic_and_nodes_are_plausible() {
         })
         .unwrap();
 }
+
+/// `feed` copies packet bodies in bulk; whatever the chunking, it must agree with `push`.
+#[test]
+fn xv11_feed_in_any_chunks_equals_push_byte_by_byte() {
+    let capture = std::fs::read(CAPTURE).unwrap();
+    let (want, want_stats) = xv11(&capture);
+    let feed = |bytes: &[u8], chunk: usize| {
+        let mut d = Xv11Decoder::new();
+        let mut revs = Vec::new();
+        for piece in bytes.chunks(chunk) {
+            let mut rest = piece;
+            while !rest.is_empty() {
+                let (n, rev) = d.feed(rest);
+                rest = &rest[n..];
+                revs.extend(rev);
+            }
+        }
+        revs.extend(d.finish());
+        (revs, d.stats())
+    };
+    assert_eq!(feed(&capture, capture.len()), (want.clone(), want_stats));
+    let garbage_mixed = (
+        proptest::collection::vec(any::<u8>(), 0..3000),
+        1usize..64,
+        0usize..capture.len() - 3000,
+    );
+    runner(64)
+        .run(&garbage_mixed, |(garbage, chunk, at)| {
+            let bytes = [&capture[at..at + 3000], &garbage[..], &capture[..2000]].concat();
+            prop_assert_eq!(feed(&bytes, chunk), xv11(&bytes));
+            Ok(())
+        })
+        .unwrap();
+}

@@ -89,25 +89,54 @@ impl PacketParser {
 
     /// Feeds one byte; returns a packet when this byte completed one with a good checksum.
     pub fn push(&mut self, byte: u8) -> Option<Packet> {
-        self.stats.bytes += 1;
-        if self.len == 0 {
-            if byte == START {
-                self.buf[0] = byte;
-                self.len = 1;
-            } else {
-                self.stats.skipped_bytes += 1;
+        self.push_slice(&[byte]).1
+    }
+
+    /// Feeds bytes until a packet completes: returns how many bytes were consumed and the
+    /// packet, if any (call again with the rest). Copies packet bodies in bulk, which is what
+    /// makes file decoding fast; the per-byte work is only the search for a start.
+    pub fn push_slice(&mut self, bytes: &[u8]) -> (usize, Option<Packet>) {
+        let mut i = 0;
+        let mut packet = None;
+        while i < bytes.len() && packet.is_none() {
+            let rest = &bytes[i..];
+            if self.len == 0 {
+                let skip = rest.iter().position(|&b| b == START).unwrap_or(rest.len());
+                self.stats.skipped_bytes += skip as u64;
+                i += skip;
+                if skip < rest.len() {
+                    self.buf[0] = START;
+                    self.len = 1;
+                    i += 1;
+                }
+                continue;
             }
-            return None;
+            let take = (PACKET_LEN - self.len).min(rest.len());
+            if take == 1 {
+                // The one-byte `push` path: a plain store, not a memcpy call.
+                self.buf[self.len] = rest[0];
+            } else {
+                self.buf[self.len..self.len + take].copy_from_slice(&rest[..take]);
+            }
+            let was = self.len;
+            self.len += take;
+            i += take;
+            if was == 1 && !is_index(self.buf[1]) {
+                // Only the index byte is kept for a new search; the rest is read again.
+                i -= take - 1;
+                self.len = 2;
+                self.resync(1);
+            } else if self.len == PACKET_LEN {
+                packet = self.complete(self.stats.bytes + i as u64);
+            }
         }
-        self.buf[self.len] = byte;
-        self.len += 1;
-        if self.len == 2 && !is_index(byte) {
-            self.resync(1);
-            return None;
-        }
-        if self.len < PACKET_LEN {
-            return None;
-        }
+        self.stats.bytes += i as u64;
+        (i, packet)
+    }
+
+    /// Checks a full buffer that ended at stream offset `end`; on a bad checksum searches it
+    /// for the next start.
+    fn complete(&mut self, end: u64) -> Option<Packet> {
         let got = u16::from_le_bytes([self.buf[20], self.buf[21]]);
         if checksum(&self.buf[..20]) != got {
             self.stats.bad_checksum += 1;
@@ -125,7 +154,7 @@ impl PacketParser {
             index: b[1] - FIRST_INDEX,
             speed_q6: u16::from_le_bytes([b[2], b[3]]),
             readings,
-            offset: self.stats.bytes - PACKET_LEN as u64,
+            offset: end - PACKET_LEN as u64,
         })
     }
 

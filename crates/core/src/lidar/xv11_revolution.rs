@@ -11,12 +11,12 @@
 
 use super::xv11::{Packet, PacketParser, Reading, PACKETS_PER_REV, READINGS_PER_PACKET};
 use super::DecodeStats;
-use crate::geom::normalize_angle;
 use crate::scan::{Beam, Scan};
 
 /// Readings in one revolution (one per degree).
 pub const BEAMS: usize = PACKETS_PER_REV * READINGS_PER_PACKET;
 const ALL_PACKETS: u128 = (1u128 << PACKETS_PER_REV) - 1;
+const DEG_TO_RAD: f32 = core::f32::consts::PI / 180.0;
 /// An index drop larger than this is a new revolution, a smaller one an out-of-order packet.
 const WRAP_DROP: u8 = (PACKETS_PER_REV / 2) as u8;
 
@@ -107,7 +107,8 @@ impl Revolution {
         let period_s = self.rpm().filter(|&r| r > 0.0).map(|r| 60.0 / r);
         let mut scan = Scan::new(stamp_s);
         for j in 0..BEAMS {
-            let angle = normalize_angle((j as f32 - 179.0).to_radians());
+            // Already in (-pi, pi]; `min` only guards the rounding of +180 degrees.
+            let angle = ((j as f32 - 179.0) * DEG_TO_RAD).min(core::f32::consts::PI);
             let cw = (179 + BEAMS - j) % BEAMS;
             let mut beam = match self.reading(cw) {
                 Some(r) if !r.invalid && r.distance_mm > 0 => {
@@ -180,9 +181,26 @@ impl Xv11Decoder {
         Self::default()
     }
 
+    /// Feeds one byte (a UART interrupt's view); returns the revolution it closed, if any.
     pub fn push(&mut self, byte: u8) -> Option<Revolution> {
+        // Not `feed(&[byte])`: returning the 1.5 KB `Option` through it costs a copy per byte.
         let packet = self.parser.push(byte)?;
         self.assembler.add(&packet, &mut self.parser.stats)
+    }
+
+    /// Feeds bytes until a revolution closes: returns how many bytes were consumed and the
+    /// revolution, if any (call again with the rest). The fast path for files and DMA buffers.
+    pub fn feed(&mut self, bytes: &[u8]) -> (usize, Option<Revolution>) {
+        let mut used = 0;
+        while used < bytes.len() {
+            let (n, packet) = self.parser.push_slice(&bytes[used..]);
+            used += n;
+            let closed = packet.and_then(|p| self.assembler.add(&p, &mut self.parser.stats));
+            if closed.is_some() {
+                return (used, closed);
+            }
+        }
+        (used, None)
     }
 
     /// Ends the stream: the partial revolution, if any. Bytes of a torn last packet stay
