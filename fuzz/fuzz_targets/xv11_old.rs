@@ -1,0 +1,12 @@
+//! XV-11 before fw 2.4: no panic; every frame handed out converts to 360 beams.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+use plumbline_core::lidar::xv11_old::Xv11OldDecoder;
+
+fuzz_target!(|data: &[u8]| {
+    let mut d = Xv11OldDecoder::new();
+    let revs: Vec<_> = data.iter().filter_map(|&b| d.push(b)).chain(d.finish()).collect();
+    for rev in revs {
+        assert_eq!(rev.to_scan(0.0).len(), 360);
+    }
+});
