@@ -74,14 +74,15 @@ impl CascadeConfig {
 }
 
 impl Default for CascadeConfig {
-    /// The "aggressive" tuning: found on the test vehicle (`flight::tests`), a 2 N push for 1 s
-    /// moves it about 0.2 m and it is back within 5 cm about 0.5 s after the push ends.
+    /// The "aggressive" tuning, chosen over eight seeds of the simulator's XV-11 hold with a
+    /// 2 N push (crates/sim/tests/closed_loop.rs); stiffer loops (position 2, velocity 5,
+    /// attitude 10, rate 40) oscillate on the lidar's noise there.
     fn default() -> Self {
         Self {
-            position_xy: PidConfig::p(2.0, 1.0),
+            position_xy: PidConfig::p(1.5, 1.0),
             position_z: PidConfig::p(1.5, 0.8),
             velocity_xy: PidConfig {
-                kp: 5.0,
+                kp: 4.0,
                 ki: 0.5,
                 kd: 0.0,
                 integral_limit: 1.5,
@@ -96,11 +97,11 @@ impl Default for CascadeConfig {
                 output_limit: 5.0,
                 derivative_tau_s: 0.0,
             },
-            attitude_rp: PidConfig::p(10.0, 4.0),
+            attitude_rp: PidConfig::p(8.0, 4.0),
             attitude_yaw: PidConfig::p(2.5, 1.5),
             rate_rp: PidConfig {
-                kp: 40.0,
-                ki: 40.0,
+                kp: 30.0,
+                ki: 30.0,
                 kd: 0.4,
                 integral_limit: 20.0,
                 output_limit: 160.0,
@@ -406,7 +407,8 @@ mod tests {
         let v = c
             .velocity_setpoint(&hold([0.25, 0.0, 1.0]), &s, 0.01)
             .unwrap();
-        assert_eq!(v, level([0.5, 0.0], 0.0));
+        let kp = c.config.position_xy.kp;
+        assert_eq!(v, level([kp * 0.25, 0.0], 0.0));
         let t = c.attitude_target(v, 0.0, &s, 0.01, true).unwrap();
         assert!(t.pitch_rad > 0.0 && t.roll_rad.abs() < 1e-6);
         // Heading 90 degrees: the world +x target is now to the vehicle's right.

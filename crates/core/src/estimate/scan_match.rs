@@ -29,7 +29,7 @@ impl Ekf {
     }
 
     fn fuse_delta(&mut self, m: &ScanMatchDelta) -> Outcome {
-        let c = Matrix3::from_fn(|i, j| m.covariance[i][j]);
+        let c = Matrix3::from_fn(|i, j| m.covariance[i][j]) * self.config.scan_covariance_scale;
         let z = Vector3::new(m.dx_m, m.dy_m, m.dtheta_rad);
         let well_formed = z.iter().all(|v| v.is_finite())
             && c.iter().all(|v| v.is_finite())

@@ -108,6 +108,11 @@ impl Autopilot {
         }
     }
 
+    /// What the last step returned (all zeros and disarmed before the first step).
+    pub fn last_outputs(&self) -> &Outputs {
+        &self.last
+    }
+
     pub fn faults(&self) -> &FaultCounters {
         &self.faults
     }
@@ -267,9 +272,12 @@ impl Autopilot {
                 } else {
                     c.descent_m_s
                 };
+                // An untrustworthy horizontal estimate is not chased: land level. After the
+                // lidar is lost the IMU-only estimate drifts faster than its covariance admits
+                // (biases and tilt are no longer observed), so that landing is level too.
+                let trusted = e.valid && failsafe != Some(FailsafeReason::LidarLost);
                 Some(CascadeSetpoint {
-                    // An untrustworthy horizontal estimate is not chased: land level.
-                    horizontal_m: e.valid.then_some(hold_xy),
+                    horizontal_m: trusted.then_some(hold_xy),
                     vertical: Vertical::ClimbRate(-rate),
                     yaw_rad,
                 })
