@@ -43,6 +43,10 @@ pub fn run(args: EvalArgs) -> CliResult {
         "rot_mean_deg": s.rot_mean_deg,
         "rot_std_deg": s.rot_std_deg,
         "rot2_mean_deg2": s.rot2_mean_deg2,
+        "near_relations": s.near_matched,
+        "near_trans_mean_m": s.near_trans_mean_m,
+        "far_relations": s.far_matched,
+        "far_trans_mean_m": s.far_trans_mean_m,
     });
     print_summary(&summary, args.json);
     Ok(())

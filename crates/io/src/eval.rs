@@ -10,6 +10,10 @@ use crate::trajectory::TrajectoryPoint;
 /// Relation stamps carry as few as 5 decimals; scans are at least tens of ms apart.
 pub const DEFAULT_TIME_TOLERANCE_S: f64 = 1e-3;
 
+/// Relations spanning at most this long are "near" (what odometry is judged on); longer ones
+/// are "far" (loop closures, where drift shows).
+pub const NEAR_SPAN_S: f64 = 2.0;
+
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EvalSummary {
     pub relations: usize,
@@ -20,6 +24,10 @@ pub struct EvalSummary {
     pub rot_mean_deg: f64,
     pub rot_std_deg: f64,
     pub rot2_mean_deg2: f64,
+    pub near_matched: usize,
+    pub near_trans_mean_m: f64,
+    pub far_matched: usize,
+    pub far_trans_mean_m: f64,
     /// Per matched relation: (index into the relations, translational error m, rotational error deg).
     pub errors: Vec<(usize, f64, f64)>,
 }
@@ -76,6 +84,9 @@ pub fn evaluate(
     }
     let (trans_mean_m, trans_std_m, trans2_mean_m2) = moments(errors.iter().map(|e| e.1));
     let (rot_mean_deg, rot_std_deg, rot2_mean_deg2) = moments(errors.iter().map(|e| e.2));
+    let is_near = |k: usize| (relations[k].t2_s - relations[k].t1_s).abs() <= NEAR_SPAN_S;
+    let near = errors.iter().filter(|e| is_near(e.0)).map(|e| e.1);
+    let far = errors.iter().filter(|e| !is_near(e.0)).map(|e| e.1);
     EvalSummary {
         relations: relations.len(),
         matched: errors.len(),
@@ -85,6 +96,10 @@ pub fn evaluate(
         rot_mean_deg,
         rot_std_deg,
         rot2_mean_deg2,
+        near_matched: near.clone().count(),
+        near_trans_mean_m: moments(near).0,
+        far_matched: far.clone().count(),
+        far_trans_mean_m: moments(far).0,
         errors,
     }
 }

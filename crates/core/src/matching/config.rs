@@ -78,6 +78,8 @@ pub struct MatchConfig {
     pub recovery_range_rad: f32,
     pub recovery_step_rad: f32,
     pub recovery_radius_m: f32,
+    /// If the heading search does not rescue the match, search translation too, +- this much.
+    pub recovery_translation_m: f32,
     /// `icl-paper` only: learning rate times point count, and its fixed iteration count.
     pub paper_rate_per_point: f32,
     pub paper_iterations: u16,
@@ -108,6 +110,7 @@ impl Default for MatchConfig {
             recovery_range_rad: 0.9,
             recovery_step_rad: 0.035,
             recovery_radius_m: 0.15,
+            recovery_translation_m: 1.2,
             paper_rate_per_point: 1.0,
             paper_iterations: 20,
         }

@@ -26,6 +26,7 @@ use crate::geom::{Pose2, Vec2};
 use crate::scan::Scan;
 use associate::PassGate;
 use metrics::{PointToLineGaussNewton, PointToPointClosedForm, PointToSegmentExact};
+use recovery::SearchBox;
 
 /// A scan matcher with room for scans of up to `N` beams.
 #[derive(Clone, Debug)]
@@ -123,29 +124,35 @@ impl<const N: usize> ScanMatcher<N> {
             }
         };
         let first = attempt(guess);
-        let poor = match &first {
+        let is_poor = |r: &Result<MatchResult, MatchError>| match r {
             Ok(r) => r.quality.inlier_ratio < cfg.recovery_below_inlier_ratio,
             Err(e) => matches!(
                 e,
                 MatchError::TooFewCorrespondences { .. } | MatchError::Diverged
             ),
         };
-        let result = if cfg.recovery && poor && cfg.kind != MatcherKind::IclPaper {
-            let second = attempt(recovery::best_heading(reference, current, guess, cfg));
-            match (&first, &second) {
-                (Ok(a), Ok(b)) if a.quality.inliers >= b.quality.inliers => first,
-                (_, Ok(b)) => Ok(MatchResult {
-                    quality: MatchQuality {
-                        recovered: true,
-                        ..b.quality
-                    },
-                    ..*b
-                }),
-                _ => first,
+        let mut result = first;
+        if cfg.recovery && cfg.kind != MatcherKind::IclPaper {
+            for search in [SearchBox::heading(cfg), SearchBox::pose(cfg)] {
+                if !is_poor(&result) {
+                    break;
+                }
+                let seed = recovery::best_pose(reference, current, guess, search, cfg);
+                let second = attempt(seed);
+                result = match (&result, second) {
+                    (Ok(a), Ok(b)) if a.quality.inliers >= b.quality.inliers => result,
+                    (_, Ok(b)) => Ok(MatchResult {
+                        quality: MatchQuality {
+                            recovered: true,
+                            ..b.quality
+                        },
+                        ..b
+                    }),
+                    (_, Err(_)) => result,
+                };
             }
-        } else {
-            first
-        }?;
+        }
+        let result = result?;
         self.previous_translation = result.motion.translation();
         Ok(result)
     }
