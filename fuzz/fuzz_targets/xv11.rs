@@ -2,11 +2,12 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use plumbline_core::lidar::xv11_revolution::Xv11Decoder;
+use plumbline_core::lidar::ByteDecoder;
 
 fuzz_target!(|data: &[u8]| {
     let mut bytewise = Xv11Decoder::new();
-    let mut a: Vec<_> = data.iter().filter_map(|&b| bytewise.push(b)).collect();
-    a.extend(bytewise.finish());
+    let mut a = Vec::new();
+    bytewise.decode_into(data, &mut a);
     let mut sliced = Xv11Decoder::new();
     let mut b = Vec::new();
     let mut rest = data;

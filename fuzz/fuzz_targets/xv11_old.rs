@@ -2,10 +2,11 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use plumbline_core::lidar::xv11_old::Xv11OldDecoder;
+use plumbline_core::lidar::ByteDecoder;
 
 fuzz_target!(|data: &[u8]| {
-    let mut d = Xv11OldDecoder::new();
-    let revs: Vec<_> = data.iter().filter_map(|&b| d.push(b)).chain(d.finish()).collect();
+    let mut revs = Vec::new();
+    Xv11OldDecoder::new().decode_into(data, &mut revs);
     for rev in revs {
         assert_eq!(rev.to_scan(0.0).len(), 360);
     }

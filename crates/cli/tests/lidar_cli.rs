@@ -23,8 +23,12 @@ fn tmp_dir(name: &str) -> PathBuf {
     dir
 }
 
-fn run(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().unwrap()
+/// Runs `plumbline` with whitespace-separated arguments (the paths used here have no spaces).
+fn run(args: &str) -> Output {
+    Command::new(BIN)
+        .args(args.split_whitespace())
+        .output()
+        .unwrap()
 }
 
 fn last_json(out: &Output) -> serde_json::Value {
@@ -37,16 +41,11 @@ fn decode_writes_a_carmen_log_that_reads_back() {
     let dir = tmp_dir("decode");
     let log = dir.join("hib.log");
     let cap = capture("hand_in_box.bin");
-    let out = run(&[
-        "lidar",
-        "decode",
-        "--device",
-        "xv11",
-        cap.to_str().unwrap(),
-        "--out",
-        log.to_str().unwrap(),
-        "--json",
-    ]);
+    let out = run(&format!(
+        "lidar decode --device xv11 {} --out {} --json",
+        cap.display(),
+        log.display()
+    ));
     assert!(
         out.status.success(),
         "{}",
@@ -78,37 +77,16 @@ fn decode_writes_a_carmen_log_that_reads_back() {
 #[test]
 fn wrong_device_and_missing_file_are_clear_errors() {
     let cap = capture("hand_in_box.bin");
-    let out = run(&[
-        "lidar",
-        "decode",
-        "--device",
-        "xv11-old",
-        cap.to_str().unwrap(),
-    ]);
+    let out = run(&format!("lidar decode --device xv11-old {}", cap.display()));
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("hand_in_box.bin: 252146 bytes but no valid xv11-old frame"),
         "{err}"
     );
-    let out = run(&[
-        "lidar",
-        "decode",
-        "--device",
-        "xv11",
-        "/no/such/capture.bin",
-    ]);
+    let out = run("lidar decode --device xv11 /no/such/capture.bin");
     assert!(String::from_utf8_lossy(&out.stderr).contains("/no/such/capture.bin"));
-    let out = run(&[
-        "lidar",
-        "record",
-        "--device",
-        "xv11",
-        "--port",
-        "/dev/plumbline-none",
-        "--out",
-        "/dev/null",
-    ]);
+    let out = run("lidar record --device xv11 --port /dev/plumbline-none --out /dev/null");
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("/dev/plumbline-none: cannot open"));
 }
@@ -117,17 +95,11 @@ fn wrong_device_and_missing_file_are_clear_errors() {
 fn plot_draws_a_png() {
     let png = tmp_dir("plot").join("rev.png");
     let cap = capture("hand_in_box.bin");
-    let out = run(&[
-        "lidar",
-        "plot",
-        "--device",
-        "xv11",
-        cap.to_str().unwrap(),
-        "--revolution",
-        "60",
-        "--out",
-        png.to_str().unwrap(),
-    ]);
+    let out = run(&format!(
+        "lidar plot --device xv11 {} --revolution 60 --out {}",
+        cap.display(),
+        png.display()
+    ));
     assert!(
         out.status.success(),
         "{}",
@@ -135,79 +107,78 @@ fn plot_draws_a_png() {
     );
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");
-    let out = run(&[
-        "lidar",
-        "plot",
-        "--device",
-        "xv11",
-        cap.to_str().unwrap(),
-        "--revolution",
-        "999",
-        "--out",
-        png.to_str().unwrap(),
-    ]);
+    let out = run(&format!(
+        "lidar plot --device xv11 {} --revolution 999 --out {}",
+        cap.display(),
+        png.display()
+    ));
     assert!(String::from_utf8_lossy(&out.stderr).contains("revolution 999 asked, 161 decoded"));
 }
 
-/// Starts `socat` joining two pseudo-terminals; `None` (with the reason) when it cannot run.
-fn socat_pair(dir: &Path) -> Result<(std::process::Child, PathBuf, PathBuf), String> {
+/// A `socat` process joining two pseudo-terminals, `a` and `b`; killed when dropped.
+struct Socat {
+    child: std::process::Child,
+    a: PathBuf,
+    b: PathBuf,
+}
+
+impl Drop for Socat {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Starts socat in `dir`; `None`, with the reason printed, where it cannot run.
+fn socat_pair(dir: &Path, test: &str) -> Option<Socat> {
     let (a, b) = (dir.join("dev-a"), dir.join("dev-b"));
-    let child = Command::new("socat")
+    let spawned = Command::new("socat")
         .arg(format!("pty,raw,echo=0,link={}", a.display()))
         .arg(format!("pty,raw,echo=0,link={}", b.display()))
         .stdout(Stdio::null())
         .stderr(Stdio::null())
-        .spawn()
-        .map_err(|e| format!("socat not runnable ({e}); scripts/setup.sh installs it"))?;
-    let start = Instant::now();
-    while !(a.exists() && b.exists()) {
-        if start.elapsed() > Duration::from_secs(5) {
-            return Err("socat made no pty pair within 5 s".into());
+        .spawn();
+    let child = match spawned {
+        Ok(child) => child,
+        Err(e) => {
+            println!("SKIPPED {test}: socat not runnable ({e}); scripts/setup.sh installs it");
+            return None;
         }
+    };
+    let socat = Socat { child, a, b };
+    let start = Instant::now();
+    while !(socat.a.exists() && socat.b.exists()) {
+        assert!(
+            start.elapsed() < Duration::from_secs(5),
+            "socat made no pty pair within 5 s"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
-    Ok((child, a, b))
+    Some(socat)
 }
 
 #[test]
 fn record_through_a_virtual_serial_port_equals_the_file_decode() {
     let dir = tmp_dir("record");
-    let (mut socat, dev_a, dev_b) = match socat_pair(&dir) {
-        Ok(p) => p,
-        Err(reason) => {
-            println!("SKIPPED record_through_a_virtual_serial_port: {reason}");
-            return;
-        }
+    let Some(socat) = socat_pair(&dir, "record_through_a_virtual_serial_port") else {
+        return;
     };
     let raw = dir.join("rec.bin");
+    let args = format!(
+        "lidar record --device xv11 --port {} --duration 8 --idle-timeout 1 --json --out {}",
+        socat.b.display(),
+        raw.display()
+    );
     let rec = Command::new(BIN)
-        .args([
-            "lidar",
-            "record",
-            "--device",
-            "xv11",
-            "--port",
-            dev_b.to_str().unwrap(),
-        ])
-        .args([
-            "--duration",
-            "4",
-            "--idle-timeout",
-            "3",
-            "--json",
-            "--out",
-            raw.to_str().unwrap(),
-        ])
+        .args(args.split_whitespace())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     std::thread::sleep(Duration::from_millis(500));
     let bytes = std::fs::read(capture("hand_in_box.bin")).unwrap();
-    std::fs::write(&dev_a, &bytes).unwrap();
+    std::fs::write(&socat.a, &bytes).unwrap();
     let out = rec.wait_with_output().unwrap();
-    let _ = socat.kill();
-    let _ = socat.wait();
     assert!(
         out.status.success(),
         "{}",
@@ -241,30 +212,15 @@ fn record_through_a_virtual_serial_port_equals_the_file_decode() {
 #[test]
 fn a_silent_port_times_out_with_a_clear_error() {
     let dir = tmp_dir("silent");
-    let (mut socat, _dev_a, dev_b) = match socat_pair(&dir) {
-        Ok(p) => p,
-        Err(reason) => {
-            println!("SKIPPED a_silent_port_times_out: {reason}");
-            return;
-        }
+    let Some(socat) = socat_pair(&dir, "a_silent_port_times_out") else {
+        return;
     };
     let start = Instant::now();
-    let out = run(&[
-        "lidar",
-        "record",
-        "--device",
-        "xv11",
-        "--port",
-        dev_b.to_str().unwrap(),
-        "--duration",
-        "10",
-        "--idle-timeout",
-        "0.5",
-        "--out",
-        dir.join("x.bin").to_str().unwrap(),
-    ]);
-    let _ = socat.kill();
-    let _ = socat.wait();
+    let out = run(&format!(
+        "lidar record --device xv11 --port {} --duration 10 --idle-timeout 0.5 --out {}",
+        socat.b.display(),
+        dir.join("x.bin").display()
+    ));
     assert!(!out.status.success());
     assert!(start.elapsed() < Duration::from_secs(5));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no data for 0.5 s"));

@@ -6,10 +6,8 @@ use plumbline_core::lidar::xv11_revolution::{Revolution, Xv11Decoder};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 
-const CAPTURE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/captures/neato-xv11/hand_in_box.bin"
-);
+mod common;
+use common::{capture, decode};
 
 /// A runner with a fixed seed so a failure reproduces bit for bit.
 pub fn runner(cases: u32) -> TestRunner {
@@ -22,10 +20,7 @@ pub fn runner(cases: u32) -> TestRunner {
 }
 
 fn xv11(bytes: &[u8]) -> (Vec<Revolution>, plumbline_core::lidar::DecodeStats) {
-    let mut d = Xv11Decoder::new();
-    let mut revs: Vec<Revolution> = bytes.iter().filter_map(|&b| d.push(b)).collect();
-    revs.extend(d.finish());
-    (revs, d.stats())
+    decode::<Xv11Decoder>(bytes)
 }
 
 #[test]
@@ -44,7 +39,7 @@ fn xv11_random_bytes_never_panic_and_counters_add_up() {
 
 #[test]
 fn xv11_garbage_between_real_packets_loses_none() {
-    let capture = std::fs::read(CAPTURE).unwrap();
+    let capture = capture("hand_in_box.bin");
     // 200 packets of the in-order part, starting at the first A0 (offset found by the decoder
     // test in `xv11_capture.rs`: packet 58 is at byte 6, so A0 is 32 packets later).
     let clean = &capture[6 + 22 * 32..6 + 22 * 232];
@@ -79,7 +74,7 @@ fn xv11_garbage_between_real_packets_loses_none() {
 
 #[test]
 fn xv11_truncation_anywhere_never_shifts_a_reading() {
-    let capture = std::fs::read(CAPTURE).unwrap();
+    let capture = capture("hand_in_box.bin");
     let clean = &capture[6 + 22 * 32..6 + 22 * 122]; // exactly one revolution
     let (full, _) = xv11(clean);
     assert_eq!(full.len(), 1);
@@ -167,7 +162,7 @@ fn rplidar_random_bytes_never_panic_and_nodes_are_plausible() {
 /// `feed` copies packet bodies in bulk; whatever the chunking, it must agree with `push`.
 #[test]
 fn xv11_feed_in_any_chunks_equals_push_byte_by_byte() {
-    let capture = std::fs::read(CAPTURE).unwrap();
+    let capture = capture("hand_in_box.bin");
     let (want, want_stats) = xv11(&capture);
     let feed = |bytes: &[u8], chunk: usize| {
         let mut d = Xv11Decoder::new();

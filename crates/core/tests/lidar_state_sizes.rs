@@ -18,12 +18,32 @@ const RPLIDAR_NODES: usize = 800;
 fn decoder_state_sizes_are_small_and_documented() {
     let rows = [
         ("Xv11Decoder (fw >= 2.4)", size_of::<Xv11Decoder>(), 1_700),
-        ("Xv11OldDecoder (fw < 2.4)", size_of::<Xv11OldDecoder>(), 3_200),
-        ("ScipDecoder<769> (URG-04LX)", size_of::<ScipDecoder<URG_STEPS>>(), 3_400),
-        ("RplidarDecoder<800>", size_of::<RplidarDecoder<RPLIDAR_NODES>>(), 5_000),
+        (
+            "Xv11OldDecoder (fw < 2.4)",
+            size_of::<Xv11OldDecoder>(),
+            3_200,
+        ),
+        (
+            "ScipDecoder<769> (URG-04LX)",
+            size_of::<ScipDecoder<URG_STEPS>>(),
+            3_400,
+        ),
+        (
+            "RplidarDecoder<800>",
+            size_of::<RplidarDecoder<RPLIDAR_NODES>>(),
+            5_000,
+        ),
         ("xv11 Revolution (output)", size_of::<Revolution>(), 1_500),
-        ("ScipScan<769> (output)", size_of::<ScipScan<URG_STEPS>>(), 3_100),
-        ("RplidarRevolution<800> (output)", size_of::<RplidarRevolution<RPLIDAR_NODES>>(), 4_900),
+        (
+            "ScipScan<769> (output)",
+            size_of::<ScipScan<URG_STEPS>>(),
+            3_100,
+        ),
+        (
+            "RplidarRevolution<800> (output)",
+            size_of::<RplidarRevolution<RPLIDAR_NODES>>(),
+            4_900,
+        ),
         ("Scan<360> (converted)", size_of::<Scan<BEAMS>>(), 5_800),
     ];
     for (name, bytes, bound) in rows {

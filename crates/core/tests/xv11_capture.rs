@@ -4,18 +4,11 @@
 use plumbline_core::lidar::xv11_revolution::{Revolution, Xv11Decoder};
 use plumbline_core::lidar::DecodeStats;
 
-const CAPTURES: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/captures/neato-xv11"
-);
+mod common;
+use common::{capture, decode};
 
 fn decode_capture() -> (Vec<Revolution>, DecodeStats) {
-    let path = format!("{CAPTURES}/hand_in_box.bin");
-    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    let mut d = Xv11Decoder::new();
-    let mut revs: Vec<Revolution> = bytes.iter().filter_map(|&b| d.push(b)).collect();
-    revs.extend(d.finish());
-    (revs, d.stats())
+    decode::<Xv11Decoder>(&capture("hand_in_box.bin"))
 }
 
 #[test]
@@ -72,22 +65,13 @@ fn a_steady_revolution_sees_a_closed_box() {
 
 /// Old-firmware captures: a binary dump of 21 frames and one frame as hex text.
 mod old_firmware {
-    use super::CAPTURES;
+    use super::common::{capture, decode};
     use plumbline_core::lidar::xv11_old::Xv11OldDecoder;
-    use plumbline_core::lidar::xv11_revolution::Revolution;
-    use plumbline_core::lidar::DecodeStats;
-
-    fn decode(bytes: &[u8]) -> (Vec<Revolution>, DecodeStats) {
-        let mut d = Xv11OldDecoder::new();
-        let mut revs: Vec<Revolution> = bytes.iter().filter_map(|&b| d.push(b)).collect();
-        revs.extend(d.finish());
-        (revs, d.stats())
-    }
 
     #[test]
     fn sparkfun_dump_holds_21_frames() {
-        let bytes = std::fs::read(format!("{CAPTURES}/sparkfun_noshield_dump_oldfw.bin")).unwrap();
-        let (revs, stats) = decode(&bytes);
+        let bytes = capture("sparkfun_noshield_dump_oldfw.bin");
+        let (revs, stats) = decode::<Xv11OldDecoder>(&bytes);
         assert_eq!(revs.len(), 21);
         assert_eq!((stats.skipped_bytes, stats.malformed), (0, 0));
         // First reading of the first frame: bytes 21 80 AE 00, the invalid flag with code 0x21;
@@ -105,14 +89,14 @@ mod old_firmware {
 
     #[test]
     fn one_run_hex_text_holds_one_frame() {
-        let text = std::fs::read_to_string(format!("{CAPTURES}/OneRun_no_shield.txt")).unwrap();
+        let text = String::from_utf8(capture("OneRun_no_shield.txt")).unwrap();
         let bytes: Vec<u8> = text
             .trim_start_matches('\u{feff}')
             .split_whitespace()
             .map(|h| u8::from_str_radix(h, 16).unwrap())
             .collect();
         assert_eq!(bytes.len(), 1446);
-        let (revs, stats) = decode(&bytes);
+        let (revs, stats) = decode::<Xv11OldDecoder>(&bytes);
         assert_eq!((revs.len(), stats.revolutions), (1, 1));
     }
 }

@@ -55,3 +55,43 @@ pub struct DecodeStats {
     /// Readings that did not fit the revolution buffer (RPLIDAR, SCIP with too many steps).
     pub overflow: u32,
 }
+
+/// What every decoder offers, so drivers, tests and fuzzers treat the devices alike.
+pub trait ByteDecoder {
+    /// What one complete (or, at the end, partial) revolution looks like for this device.
+    type Revolution;
+    /// Feeds one byte; returns the revolution it closed, if any.
+    fn push(&mut self, byte: u8) -> Option<Self::Revolution>;
+    /// Ends the stream: whatever is held back that may still be handed out.
+    fn finish(&mut self) -> Option<Self::Revolution>;
+    fn stats(&self) -> DecodeStats;
+
+    /// Decodes a whole buffer, then ends the stream; revolutions go to `out`.
+    fn decode_into<E: Extend<Self::Revolution>>(&mut self, bytes: &[u8], out: &mut E) {
+        out.extend(bytes.iter().filter_map(|&b| self.push(b)));
+        out.extend(self.finish());
+    }
+}
+
+/// Implements [`ByteDecoder`] with the type's inherent `push`, `finish` and `stats`.
+macro_rules! byte_decoder {
+    ($ty:ty, $rev:ty $(, const $n:ident)?) => {
+        impl$(<const $n: usize>)? $crate::lidar::ByteDecoder for $ty {
+            type Revolution = $rev;
+            fn push(&mut self, byte: u8) -> Option<$rev> {
+                <$ty>::push(self, byte)
+            }
+            fn finish(&mut self) -> Option<$rev> {
+                <$ty>::finish(self)
+            }
+            fn stats(&self) -> $crate::lidar::DecodeStats {
+                <$ty>::stats(self)
+            }
+        }
+    };
+}
+
+byte_decoder!(xv11_revolution::Xv11Decoder, xv11_revolution::Revolution);
+byte_decoder!(xv11_old::Xv11OldDecoder, xv11_revolution::Revolution);
+byte_decoder!(scip::ScipDecoder<N>, scip::ScipScan<N>, const N);
+byte_decoder!(rplidar::RplidarDecoder<N>, rplidar::RplidarRevolution<N>, const N);

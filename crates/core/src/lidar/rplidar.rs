@@ -221,17 +221,14 @@ impl<const N: usize> RplidarDecoder<N> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lidar::test_encoders::{rplidar_descriptor, rplidar_node};
+    use crate::lidar::test_encoders::{decode_all, rplidar_descriptor, rplidar_node};
     extern crate std;
     use std::vec::Vec;
 
     type A1 = RplidarDecoder<800>;
 
     fn decode(bytes: &[u8]) -> (Vec<RplidarRevolution<800>>, DecodeStats) {
-        let mut d = A1::new();
-        let mut revs: Vec<_> = bytes.iter().filter_map(|&b| d.push(b)).collect();
-        revs.extend(d.finish());
-        (revs, d.stats())
+        decode_all::<A1>(bytes)
     }
 
     /// `turns` revolutions of 360 nodes, one a degree, distance = 1000 mm + degree.

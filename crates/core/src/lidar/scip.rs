@@ -211,6 +211,12 @@ impl<const N: usize> ScipDecoder<N> {
         self.stats
     }
 
+    /// Ends the stream. Always `None`: a scan is complete only at the empty line closing its
+    /// reply, so a reply cut short is dropped (its bytes stay counted in `bytes`).
+    pub fn finish(&mut self) -> Option<ScipScan<N>> {
+        None
+    }
+
     pub fn push(&mut self, byte: u8) -> Option<ScipScan<N>> {
         self.stats.bytes += 1;
         if byte != b'\n' {
@@ -360,16 +366,14 @@ impl<const N: usize> ScipDecoder<N> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lidar::test_encoders::{scip_encode, scip_scan_reply};
+    use crate::lidar::test_encoders::{decode_all, scip_encode, scip_scan_reply};
     extern crate std;
     use std::vec::Vec;
 
     type Urg = ScipDecoder<769>;
 
     fn decode(bytes: &[u8]) -> (Vec<ScipScan<769>>, DecodeStats) {
-        let mut d = Urg::new();
-        let scans = bytes.iter().filter_map(|&b| d.push(b)).collect();
-        (scans, d.stats())
+        decode_all::<Urg>(bytes)
     }
 
     #[test]

@@ -103,3 +103,13 @@ pub fn rplidar_node(start: bool, quality: u8, angle_deg: f64, distance_mm: f64) 
     let [d0, d1] = dist.to_le_bytes();
     [quality << 2 | flags, a0, a1, d0, d1]
 }
+
+/// Every revolution a fresh decoder makes of `bytes`, and its counters.
+pub fn decode_all<D: crate::lidar::ByteDecoder + Default>(
+    bytes: &[u8],
+) -> (Vec<D::Revolution>, crate::lidar::DecodeStats) {
+    let mut d = D::default();
+    let mut out = Vec::new();
+    d.decode_into(bytes, &mut out);
+    (out, d.stats())
+}

@@ -104,7 +104,7 @@ impl Xv11OldDecoder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lidar::test_encoders::xv11_reading;
+    use crate::lidar::test_encoders::{decode_all, xv11_reading};
     extern crate std;
     use std::vec::Vec;
 
@@ -117,10 +117,7 @@ mod tests {
     }
 
     fn decode(bytes: &[u8]) -> (Vec<Revolution>, DecodeStats) {
-        let mut d = Xv11OldDecoder::new();
-        let mut revs: Vec<Revolution> = bytes.iter().filter_map(|&b| d.push(b)).collect();
-        revs.extend(d.finish());
-        (revs, d.stats())
+        decode_all::<Xv11OldDecoder>(bytes)
     }
 
     #[test]

@@ -217,15 +217,12 @@ impl Xv11Decoder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lidar::test_encoders::{xv11_packet, xv11_reading, xv11_revolution};
+    use crate::lidar::test_encoders::{decode_all, xv11_packet, xv11_reading, xv11_revolution};
     extern crate std;
     use std::vec::Vec;
 
     fn decode(bytes: &[u8]) -> (Vec<Revolution>, DecodeStats) {
-        let mut d = Xv11Decoder::new();
-        let mut revs: Vec<Revolution> = bytes.iter().filter_map(|&b| d.push(b)).collect();
-        revs.extend(d.finish());
-        (revs, d.stats())
+        decode_all::<Xv11Decoder>(bytes)
     }
 
     #[test]
