@@ -11,7 +11,7 @@ use super::supervisor::{Status, Supervisor, SupervisorConfig, EVENT_LOG_LEN};
 use crate::control::cascade::{Cascade, CascadeConfig, CascadeSetpoint, Vertical};
 use crate::control::mixer::{Demand, Mixer};
 use crate::control::sas::{self, SasConfig};
-use crate::estimate::ekf::Outcome;
+use crate::estimate::ekf::{ix, Outcome};
 use crate::estimate::estimator::{Estimator, EstimatorConfig, EstimatorCounters};
 use crate::msgs::{
     EstimatedState, FailsafeReason, FlightMode, FrameKind, Inputs, MotorCommands, Outputs,
@@ -158,7 +158,7 @@ impl Autopilot {
         // Disarmed means on the floor; so does an estimate below the floor, which happens when a
         // touchdown stops the vehicle below the sonar's minimum range and the IMU missed the
         // shock: it is still and at height zero.
-        let below_floor = self.estimator.state().position_m[2] < 0.0;
+        let below_floor = self.estimator.ekf().state()[ix::POS + 2] < 0.0;
         if self.mode == FlightMode::Disarmed || below_floor {
             self.estimator.fuse_at_rest();
         }
