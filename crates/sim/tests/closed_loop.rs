@@ -229,3 +229,31 @@ fn lidar_failure_holds_then_lands() {
     assert_eq!(log.failsafe, Some(FailsafeReason::LidarLost));
     assert_eq!(log.modes.last().unwrap().1, FlightMode::Disarmed);
 }
+
+/// Twenty seeds of the hold with seed 000's push: none may crash, and the hold error before
+/// the push must average within issue 4's 5 cm.
+#[test]
+fn twenty_seeds_of_hold_and_push_do_not_crash() {
+    let (mut crashes, mut rms_sum, mut flown) = (Vec::new(), 0.0, 0);
+    for seed in 100..120 {
+        let mut c = room(seed);
+        c.pushes.push(Push {
+            start_s: 20.0,
+            duration_s: 1.0,
+            force_n: Vec3::new(2.0, 0.0, 0.0),
+        });
+        c.max_duration_s = 30.0;
+        let start = [c.world.start[0], c.world.start[1]];
+        let (status, log) = fly(&c, vec![(0.5, true)], None);
+        if status != Status::Completed {
+            crashes.push((seed, status));
+            continue;
+        }
+        rms_sum += hold_error(&log.borrow(), start, 8.0, 20.0).0;
+        flown += 1;
+    }
+    let mean_rms = rms_sum / flown.max(1) as f64;
+    println!("mean hold rms over {flown} seeds: {mean_rms:.4} m");
+    assert!(crashes.is_empty(), "{crashes:?}");
+    assert!(mean_rms < 0.05, "{mean_rms}");
+}
