@@ -225,3 +225,75 @@ fn a_silent_port_times_out_with_a_clear_error() {
     assert!(start.elapsed() < Duration::from_secs(5));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no data for 0.5 s"));
 }
+
+/// Plays the sensor on the far end of the pty pair: what it receives arrives on the channel.
+fn device_end(path: &Path) -> (std::fs::File, std::sync::mpsc::Receiver<Vec<u8>>) {
+    use std::io::Read;
+    let dev = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)
+        .unwrap();
+    let mut reader = dev.try_clone().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 256];
+        while let Ok(n @ 1..) = reader.read(&mut buf) {
+            if tx.send(buf[..n].to_vec()).is_err() {
+                break;
+            }
+        }
+    });
+    (dev, rx)
+}
+
+fn receive_line(rx: &std::sync::mpsc::Receiver<Vec<u8>>) -> Vec<u8> {
+    let mut got = Vec::new();
+    while !got.ends_with(b"\n") {
+        got.extend(
+            rx.recv_timeout(Duration::from_secs(5))
+                .expect("nothing received within 5 s"),
+        );
+    }
+    got
+}
+
+#[test]
+fn record_starts_and_stops_a_urg_stream_and_decodes_its_reply() {
+    use std::io::Write;
+    let dir = tmp_dir("urg");
+    let Some(socat) = socat_pair(&dir, "record_starts_and_stops_a_urg_stream") else {
+        return;
+    };
+    let (mut dev, rx) = device_end(&socat.a);
+    let args = format!(
+        "lidar record --device urg --port {} --duration 8 --idle-timeout 1 --json --out {}",
+        socat.b.display(),
+        dir.join("urg.bin").display()
+    );
+    let rec = Command::new(BIN)
+        .args(args.split_whitespace())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    assert_eq!(receive_line(&rx), b"MD0044072500000\n");
+    // One GS reply holding the specification's example value twice (1234 mm = "CB").
+    dev.write_all(b"GS0044004500\n00P\n00000\nCBCB:\n\n")
+        .unwrap();
+    let out = rec.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(receive_line(&rx), b"QT\n");
+    let summary = last_json(&out);
+    assert_eq!(
+        (
+            summary["revolutions"].as_u64(),
+            summary["invalid_beams"].as_u64()
+        ),
+        (Some(1), Some(0))
+    );
+}

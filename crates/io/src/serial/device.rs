@@ -3,6 +3,7 @@
 use crate::carmen::LaserRecord;
 use plumbline_core::lidar::rplidar::{RplidarConfig, RplidarDecoder, RplidarRevolution};
 use plumbline_core::lidar::scip::{ScipDecoder, ScipScan, UrgConfig};
+use plumbline_core::lidar::scip_command::{write_command, Command, Encoding};
 use plumbline_core::lidar::xv11_old::Xv11OldDecoder;
 use plumbline_core::lidar::xv11_revolution::{Revolution, Xv11Decoder};
 use plumbline_core::lidar::DecodeStats;
@@ -59,6 +60,30 @@ impl fmt::Display for Device {
             Device::Rplidar => 3,
         };
         f.write_str(Device::NAMES[i])
+    }
+}
+
+/// Bytes that start and stop a device's stream. The XV-11 streams whenever its motor turns; the
+/// URG streams after `MD` (steps 44..=725, every scan, until `QT`); the RPLIDAR after `SCAN`
+/// (`A5 20`, ended by `STOP`, `A5 25`).
+pub fn stream_commands(device: Device) -> (Vec<u8>, Vec<u8>) {
+    match device {
+        Device::Xv11 | Device::Xv11Old => (Vec::new(), Vec::new()),
+        Device::Urg => {
+            let md = Command::Stream {
+                start: 44,
+                end: 725,
+                cluster: 0,
+                interval: 0,
+                scans: 0,
+                encoding: Encoding::ThreeChar,
+            };
+            let mut buf = [0u8; 32];
+            // The parameters above are in range and the buffer holds any command.
+            let n = write_command(&md, &mut buf).unwrap_or(0);
+            (buf[..n].to_vec(), b"QT\n".to_vec())
+        }
+        Device::Rplidar => (vec![0xA5, 0x20], vec![0xA5, 0x25]),
     }
 }
 

@@ -6,5 +6,5 @@ mod device;
 mod port;
 
 pub use capture::{decode_capture, DecodeSummary};
-pub use device::{DecodedScan, Device, DeviceDecoder};
+pub use device::{stream_commands, DecodedScan, Device, DeviceDecoder};
 pub use port::{record, RecordError, RecordOptions, Recorded};

@@ -4,7 +4,7 @@
 //! (wrong port, device off), a reported fault in [`Recorded`] when the stream stopped.
 
 use super::capture::DecodeSummary;
-use super::device::{DecodedScan, Device, DeviceDecoder};
+use super::device::{stream_commands, DecodedScan, Device, DeviceDecoder};
 use std::io::{self, Read, Write};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
@@ -34,7 +34,7 @@ pub enum RecordError {
         port: String,
         source: serialport::Error,
     },
-    /// The port failed while reading (unplugged, closed by the other side).
+    /// The port failed while reading or sending the start command (unplugged, closed).
     Read {
         port: String,
         source: io::Error,
@@ -51,7 +51,7 @@ impl std::fmt::Display for RecordError {
         match self {
             RecordError::Open { port, source } => write!(f, "{port}: cannot open: {source}"),
             RecordError::Read { port, source } => {
-                write!(f, "{port}: read failed (device gone?): {source}")
+                write!(f, "{port}: read or write failed (device gone?): {source}")
             }
             RecordError::Silent { port, idle } => write!(
                 f,
@@ -85,6 +85,12 @@ pub fn record(
             port: opts.port.clone(),
             source,
         })?;
+    let (start_cmd, stop_cmd) = stream_commands(opts.device);
+    let command_error = |source| RecordError::Read {
+        port: opts.port.clone(),
+        source,
+    };
+    port.write_all(&start_cmd).map_err(command_error)?;
     let mut decoder = DeviceDecoder::new(opts.device);
     let mut scans = Vec::new();
     let bytes_per_s = f64::from(opts.baud.max(1)) / 10.0;
@@ -137,6 +143,8 @@ pub fn record(
             }
         }
     }
+    // Best effort: a device that vanished cannot be told to stop, and that is not an error.
+    let _ = port.write_all(&stop_cmd);
     if let Some(scan) = decoder.finish() {
         emit(scan, total, &mut scans)?;
     }
