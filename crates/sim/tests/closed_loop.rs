@@ -2,10 +2,13 @@
 //! mixer, modes and failsafes) flying the simulated vehicle through the runner's
 //! `FlightSoftware` interface. Seed 000 Fig. 8-9: ICL displacement drives the hold.
 
+use plumbline_core::control::airframe::Airframe;
 use plumbline_core::flight::autopilot::AutopilotConfig;
 use plumbline_core::flight::onboard::Onboard;
 use plumbline_core::matching::OdometryConfig;
-use plumbline_core::msgs::{FailsafeReason, FlightMode, Inputs, MotorCommands, PilotInput};
+use plumbline_core::msgs::{
+    FailsafeReason, FlightMode, FrameKind, Inputs, MotorCommands, PilotInput,
+};
 use plumbline_core::scan::{Beam, Scan};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
@@ -13,7 +16,7 @@ use plumbline_sim::runner::{
     run, FlightSoftware, Pilot, Recorder, SensorFrame, SimConfig, StateSample, Status,
 };
 use plumbline_sim::sensors::lidar::{LidarProfile, LidarScan};
-use plumbline_sim::vehicle::{VehicleParams, GRAVITY};
+use plumbline_sim::vehicle::{Frame, VehicleParams};
 use plumbline_sim::world::World;
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -21,20 +24,20 @@ use std::rc::Rc;
 /// Beams the onboard scans can hold (the XV-11's 360).
 const BEAMS: usize = 360;
 
-/// The autopilot configured for a simulated vehicle: hover collective and control
-/// effectiveness from its parameters (X frame).
+/// The autopilot configured for a simulated vehicle: its airframe in the onboard terms.
 fn autopilot_for(v: &VehicleParams) -> AutopilotConfig {
-    let max_thrust = v.thrust_coeff * v.max_rotor_speed_radps * v.max_rotor_speed_radps;
-    let lever = v.arm_length_m * std::f64::consts::FRAC_1_SQRT_2;
-    let yaw_arm = v.moment_coeff / v.thrust_coeff;
-    let mut c = AutopilotConfig::default();
-    c.cascade.hover_collective = (v.mass_kg * GRAVITY / (4.0 * max_thrust)) as f32;
-    c.cascade.effectiveness_rad_s2 = [
-        (4.0 * max_thrust * lever / v.inertia_kgm2[0]) as f32,
-        (4.0 * max_thrust * lever / v.inertia_kgm2[1]) as f32,
-        (4.0 * max_thrust * yaw_arm / v.inertia_kgm2[2]) as f32,
-    ];
-    c
+    let frame = match v.frame {
+        Frame::X => FrameKind::X,
+        Frame::Plus => FrameKind::Plus,
+    };
+    AutopilotConfig::for_airframe(&Airframe {
+        frame,
+        mass_kg: v.mass_kg as f32,
+        inertia_kgm2: v.inertia_kgm2.map(|i| i as f32),
+        arm_length_m: v.arm_length_m as f32,
+        max_thrust_n: (v.thrust_coeff * v.max_rotor_speed_radps * v.max_rotor_speed_radps) as f32,
+        yaw_moment_per_thrust_m: (v.moment_coeff / v.thrust_coeff) as f32,
+    })
 }
 
 /// What the test wants to see after the run.

@@ -3,6 +3,7 @@
 //! Pure algorithms (DESIGN.md §2): each takes state, setpoint and `dt` and returns an output;
 //! the autopilot in [`crate::flight`] owns timing and modes.
 
+pub mod airframe;
 pub mod cascade;
 pub mod mixer;
 pub mod pid;

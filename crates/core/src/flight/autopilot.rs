@@ -8,6 +8,7 @@
 
 use super::events::EventLog;
 use super::supervisor::{Status, Supervisor, SupervisorConfig, EVENT_LOG_LEN};
+use crate::control::airframe::Airframe;
 use crate::control::cascade::{Cascade, CascadeConfig, CascadeSetpoint, Vertical};
 use crate::control::mixer::{Demand, Mixer};
 use crate::control::sas::{self, SasConfig};
@@ -28,6 +29,19 @@ pub struct AutopilotConfig {
     pub sas: SasConfig,
     pub supervisor: SupervisorConfig,
     pub landing: LandingConfig,
+}
+
+impl AutopilotConfig {
+    /// Defaults with the frame, hover collective and control effectiveness of `airframe`.
+    pub fn for_airframe(airframe: &Airframe) -> Self {
+        let mut c = Self {
+            frame: airframe.frame,
+            ..Self::default()
+        };
+        c.cascade.hover_collective = airframe.hover_collective();
+        c.cascade.effectiveness_rad_s2 = airframe.effectiveness_rad_s2();
+        c
+    }
 }
 
 /// Descent rates and the on-ground test.

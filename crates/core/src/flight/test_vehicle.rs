@@ -3,6 +3,7 @@
 //! matcher that reports the true pose change with noise. The simulator crate is the real
 //! model; this one exists so the onboard code can be tested closed-loop inside `core`.
 
+use crate::control::airframe::Airframe;
 use crate::geom::Pose2;
 use crate::msgs::{
     FrameKind, ImuSample, Inputs, MotorCommands, PilotInput, ScanMatchDelta, ScanMatchStatus,
@@ -21,8 +22,15 @@ const MOTOR_TAU_S: f32 = 0.0125;
 const ROTOR_TAU_S: f32 = 0.025;
 const DRAG_N_PER_M_S: f32 = 0.1;
 
-/// Hover collective of this vehicle: the thrust fraction per rotor that carries its weight.
-pub const HOVER_COLLECTIVE: f32 = MASS_KG * GRAVITY_M_S2 / (4.0 * MAX_THRUST_N);
+/// This vehicle in the controllers' terms.
+pub const AIRFRAME: Airframe = Airframe {
+    frame: FrameKind::X,
+    mass_kg: MASS_KG,
+    inertia_kgm2: INERTIA,
+    arm_length_m: ARM_M,
+    max_thrust_n: MAX_THRUST_N,
+    yaw_moment_per_thrust_m: YAW_PER_THRUST_M,
+};
 
 pub struct TestVehicle {
     pub position_m: Vector3<f32>,

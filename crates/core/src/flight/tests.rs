@@ -3,8 +3,7 @@
 extern crate std;
 
 use super::autopilot::{Autopilot, AutopilotConfig};
-use super::test_vehicle::{TestVehicle, HOVER_COLLECTIVE};
-use crate::control::cascade::CascadeConfig;
+use super::test_vehicle::{TestVehicle, AIRFRAME};
 use crate::msgs::{FailsafeReason, FlightMode, Inputs, Outputs};
 use libm::hypotf;
 
@@ -12,13 +11,7 @@ const HZ: u64 = 500;
 const DT: f32 = 1.0 / HZ as f32;
 
 fn config() -> AutopilotConfig {
-    AutopilotConfig {
-        cascade: CascadeConfig {
-            hover_collective: HOVER_COLLECTIVE,
-            ..CascadeConfig::default()
-        },
-        ..AutopilotConfig::default()
-    }
+    AutopilotConfig::for_airframe(&AIRFRAME)
 }
 
 struct Flight {
