@@ -166,6 +166,18 @@ fn room(seed: u64) -> SimConfig {
     c
 }
 
+/// The room with seed 000's external force: 2 N along x for 1 s from `push_s`.
+fn pushed_room(seed: u64, push_s: f64, duration_s: f64) -> SimConfig {
+    let mut c = room(seed);
+    c.pushes.push(Push {
+        start_s: push_s,
+        duration_s: 1.0,
+        force_n: Vec3::new(2.0, 0.0, 0.0),
+    });
+    c.max_duration_s = duration_s;
+    c
+}
+
 /// Horizontal distance from the start over a time window, (rms, max).
 fn hold_error(log: &Log, start: [f64; 2], from_s: f64, to_s: f64) -> (f64, f64) {
     let errs: Vec<f64> = log
@@ -180,13 +192,7 @@ fn hold_error(log: &Log, start: [f64; 2], from_s: f64, to_s: f64) -> (f64, f64) 
 
 #[test]
 fn holds_over_the_start_through_a_push_and_lands() {
-    let mut c = room(11);
-    c.pushes.push(Push {
-        start_s: 15.0,
-        duration_s: 1.0,
-        force_n: Vec3::new(2.0, 0.0, 0.0),
-    });
-    c.max_duration_s = 34.0;
+    let c = pushed_room(11, 15.0, 34.0);
     let start = [c.world.start[0], c.world.start[1]];
     let (status, log) = fly(&c, vec![(0.5, true), (25.0, false)], None);
     let log = log.borrow();
@@ -239,13 +245,7 @@ fn lidar_failure_holds_then_lands() {
 fn twenty_seeds_of_hold_and_push_do_not_crash() {
     let (mut crashes, mut rms_sum, mut flown) = (Vec::new(), 0.0, 0);
     for seed in 100..120 {
-        let mut c = room(seed);
-        c.pushes.push(Push {
-            start_s: 20.0,
-            duration_s: 1.0,
-            force_n: Vec3::new(2.0, 0.0, 0.0),
-        });
-        c.max_duration_s = 30.0;
+        let c = pushed_room(seed, 20.0, 30.0);
         let start = [c.world.start[0], c.world.start[1]];
         let (status, log) = fly(&c, vec![(0.5, true)], None);
         if status != Status::Completed {
