@@ -10,6 +10,7 @@ mod plot;
 mod report;
 mod sim_cmd;
 mod sim_plot;
+mod sim_world;
 
 #[derive(Parser)]
 #[command(name = "plumbline", version, about = "Indoor lidar navigation and flight control for quadcopters")]

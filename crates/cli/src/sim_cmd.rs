@@ -1,8 +1,10 @@
 //! `plumbline sim`: closed-loop flight in the simulator, writing the emulated sensor logs and the
 //! ground truth in the benchmark formats (DESIGN.md §4, §5).
 
+use crate::log_args::LogArgs;
 use crate::report::{print_summary, progress, CliError, CliResult};
 use crate::sim_plot;
+use crate::sim_world;
 use clap::Args;
 use indicatif::ProgressBar;
 use plumbline_core::msgs::{ImuSample, SonarSample};
@@ -25,7 +27,8 @@ use std::time::Instant;
 
 #[derive(Args, Debug)]
 pub struct SimArgs {
-    /// A shipped world (room, office, building) or a world file (crates/sim/WORLDS.md).
+    /// A shipped world (room, office, building, intel), a world file (crates/sim/WORLDS.md)
+    /// or an occupancy image (map.pgm with map.yaml beside it).
     #[arg(long, default_value = "office")]
     pub world: String,
     /// What to fly: `survey` (the world's path) or `hold` (hover over the start).
@@ -53,6 +56,12 @@ pub struct SimArgs {
     /// A push on the frame: `START,DURATION,FX,FY,FZ` (s, s, N world frame); repeatable.
     #[arg(long, value_parser = parse_push)]
     pub push: Vec<Push>,
+    /// Instead of flying: rasterise this CARMEN log's laser hits at its poses into a world
+    /// (NAME.world, NAME.pgm, NAME.yaml in --out, NAME from the log's file name).
+    #[arg(long, value_name = "LOG")]
+    pub rasterize: Option<PathBuf>,
+    #[command(flatten)]
+    pub log_args: LogArgs,
     /// Write scans.clf, imu.csv, sonar.csv, truth.txt, truth.relations, summary.json and plots.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -84,9 +93,12 @@ fn load_world(arg: &str) -> Result<World, CliError> {
     if let Some(w) = World::shipped(arg) {
         return w.map_err(|e| CliError(format!("shipped world {arg}: {e}")));
     }
+    if arg.ends_with(".pgm") {
+        return sim_world::load_pgm(Path::new(arg));
+    }
     let text = std::fs::read_to_string(arg).map_err(|e| {
         CliError(format!(
-            "{arg}: {e} (shipped worlds: room, office, building)"
+            "{arg}: {e} (shipped worlds: room, office, building, intel)"
         ))
     })?;
     World::parse(&text).map_err(|e| CliError(format!("{arg}: {e}")))
@@ -265,7 +277,41 @@ fn summary(args: &SimArgs, config: &SimConfig, out: &Outcome, wall_s: f64) -> se
     })
 }
 
+/// `--rasterize LOG`: writes the world and reports its size.
+fn rasterize(args: &SimArgs, log_path: &Path) -> CliResult {
+    let dir = args
+        .out
+        .as_deref()
+        .ok_or_else(|| CliError("--rasterize needs --out DIR".into()))?;
+    let log = args.log_args.read(log_path)?;
+    let name = log_path
+        .file_name()
+        .map_or("log".into(), |s| s.to_string_lossy().into_owned());
+    let name = name
+        .split('.')
+        .next()
+        .unwrap_or("log")
+        .trim_end_matches("-corrected")
+        .to_string();
+    let (world, grid) = sim_world::rasterize(&log, &name)?;
+    sim_world::write_world(dir, &world, &grid)?;
+    let [x0, y0, x1, y1] = world.bounds();
+    let summary = json!({
+        "world": world.name,
+        "scans": log.scans.len(),
+        "walls": world.walls.len(),
+        "waypoints": world.path.len(),
+        "size_m": [x1 - x0, y1 - y0],
+        "resolution_m": grid.resolution_m,
+    });
+    print_summary(&summary, args.json);
+    Ok(())
+}
+
 pub fn run(args: SimArgs) -> CliResult {
+    if let Some(log) = args.rasterize.as_deref() {
+        return rasterize(&args, log);
+    }
     let world = load_world(&args.world)?;
     let lidar = LidarProfile::by_name(&args.lidar)
         .ok_or_else(|| CliError(format!("unknown lidar {}", args.lidar)))?;

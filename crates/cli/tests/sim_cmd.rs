@@ -94,3 +94,89 @@ fn bad_world_file_names_the_line() {
     assert!(err.contains("line 2") && err.contains("4 numbers"), "{err}");
     std::fs::remove_file(&tmp).ok();
 }
+
+#[test]
+fn a_log_rasterises_into_a_world_that_can_be_flown() {
+    let tmp = std::env::temp_dir().join(format!("plumbline-sim-raster-{}", std::process::id()));
+    let log = tmp.join("box.clf");
+    std::fs::create_dir_all(&tmp).unwrap();
+    // A robot at two poses in a 6 m x 6 m room scanning 360 degrees: every beam hits a wall.
+    let mut text = String::new();
+    for (k, x) in [(0, 2.0), (1, 3.0)] {
+        let ranges: Vec<String> = (0..360)
+            .map(|b| {
+                let a = (b as f64).to_radians();
+                let (c, s) = (a.cos(), a.sin());
+                let tx = if c > 0.0 {
+                    (6.0 - x) / c
+                } else if c < 0.0 {
+                    -x / c
+                } else {
+                    f64::INFINITY
+                };
+                let ty = if s > 0.0 {
+                    3.0 / s
+                } else if s < 0.0 {
+                    3.0 / -s
+                } else {
+                    f64::INFINITY
+                };
+                format!("{:.3}", tx.min(ty))
+            })
+            .collect();
+        text += &format!(
+            "ROBOTLASER1 0 0 6.265732 0.017453 30 0.01 0 360 {} 0 {x} 3 0 {x} 3 0 0 0 0 0 0 {k}.0 host {k}.0\n",
+            ranges.join(" ")
+        );
+    }
+    std::fs::write(&log, text).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_plumbline"))
+        .args([
+            "sim",
+            "--rasterize",
+            log.to_str().unwrap(),
+            "--out",
+            tmp.to_str().unwrap(),
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let world = tmp.join("box.world");
+    let text = std::fs::read_to_string(&world).unwrap();
+    assert!(
+        text.lines().filter(|l| l.starts_with("wall")).count() >= 4,
+        "{text}"
+    );
+    assert!(tmp.join("box.pgm").exists() && tmp.join("box.yaml").exists());
+    let fly = |w: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_plumbline"))
+            .args([
+                "sim",
+                "--world",
+                w.to_str().unwrap(),
+                "--scenario",
+                "hold",
+                "--duration",
+                "2",
+                "--json",
+            ])
+            .output()
+            .unwrap()
+    };
+    for w in [world, tmp.join("box.pgm")] {
+        let out = fly(&w);
+        assert!(
+            out.status.success(),
+            "{}: {}",
+            w.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(String::from_utf8_lossy(&out.stdout).contains("\"status\":\"completed\""));
+    }
+    std::fs::remove_dir_all(&tmp).ok();
+}

@@ -6,6 +6,7 @@ pub mod battery;
 pub mod disturb;
 pub mod dynamics;
 pub mod math;
+pub mod occupancy;
 pub mod pilot;
 pub mod plan;
 pub mod power;

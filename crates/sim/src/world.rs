@@ -3,6 +3,7 @@
 //! `crates/sim/WORLDS.md`; the shipped worlds live in `crates/sim/worlds/`.
 
 use crate::math::Vec3;
+use crate::occupancy::Occupancy;
 
 /// A wall from `a` to `b` (world x, y in metres), floor to ceiling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -100,6 +101,7 @@ pub const SHIPPED: &[(&str, &str)] = &[
     ("room", include_str!("../worlds/room.world")),
     ("office", include_str!("../worlds/office.world")),
     ("building", include_str!("../worlds/building.world")),
+    ("intel", include_str!("../worlds/intel.world")),
 ];
 
 fn closed_loop(points: &[[f64; 2]]) -> impl Iterator<Item = Segment> + '_ {
@@ -247,6 +249,92 @@ impl World {
         Ok(w)
     }
 
+    /// A world whose walls outline an occupancy grid's occupied cells.
+    pub fn from_occupancy(
+        name: &str,
+        grid: &Occupancy,
+        start: [f64; 3],
+        path: Vec<[f64; 2]>,
+        altitude_m: f64,
+        ceiling_m: f64,
+    ) -> World {
+        World {
+            name: name.into(),
+            ceiling_m,
+            start,
+            walls: grid.walls(),
+            blocks: Vec::new(),
+            path,
+            altitude_m,
+            walkers: Vec::new(),
+        }
+    }
+
+    /// The world in the line format of `WORLDS.md` (walls as `wall` lines; blocks become plain
+    /// walls, people and paths are kept), parseable by [`World::parse`].
+    pub fn to_text(&self) -> String {
+        // Millimetres are plenty for walls; trailing zeros are trimmed to keep files small.
+        let n = |v: f64| {
+            let s = format!("{v:.3}");
+            let s = s.trim_end_matches('0').trim_end_matches('.');
+            if s == "-0" {
+                "0".to_string()
+            } else {
+                s.to_string()
+            }
+        };
+        let mut out = format!(
+            "name {}\nceiling {}\nstart {} {} {}\naltitude {}\n",
+            self.name,
+            n(self.ceiling_m),
+            n(self.start[0]),
+            n(self.start[1]),
+            n(self.start[2]),
+            n(self.altitude_m)
+        );
+        for w in &self.walls {
+            out += &format!(
+                "wall {} {} {} {}\n",
+                n(w.a[0]),
+                n(w.a[1]),
+                n(w.b[0]),
+                n(w.b[1])
+            );
+        }
+        for p in &self.path {
+            out += &format!("path {} {}\n", n(p[0]), n(p[1]));
+        }
+        for p in &self.walkers {
+            out += &format!(
+                "person {} {} {} {} {}\n",
+                n(p.from[0]),
+                n(p.from[1]),
+                n(p.to[0]),
+                n(p.to[1]),
+                n(p.speed_mps)
+            );
+        }
+        out
+    }
+
+    /// The free point with the most room around it, on a 0.5 m lattice (a take-off point for
+    /// worlds that do not name one, such as images).
+    pub fn most_open_point(&self) -> [f64; 2] {
+        let [x0, y0, x1, y1] = self.bounds();
+        let mut best = ([x0, y0], -1.0);
+        let (nx, ny) = (((x1 - x0) / 0.5) as usize, ((y1 - y0) / 0.5) as usize);
+        for j in 0..=ny {
+            for i in 0..=nx {
+                let p = [x0 + i as f64 * 0.5, y0 + j as f64 * 0.5];
+                let c = self.clearance(p);
+                if c > best.1 && !self.inside_block(p) {
+                    best = (p, c);
+                }
+            }
+        }
+        best.0
+    }
+
     /// Distance from a point to the nearest wall, m.
     pub fn clearance(&self, p: [f64; 2]) -> f64 {
         self.walls
@@ -365,6 +453,16 @@ mod tests {
             .reason
             .contains("from a wall"));
         assert!(w.check_free([1.0, 1.0], 0.3, "start").is_ok());
+    }
+
+    #[test]
+    fn text_round_trip() {
+        let w = World::shipped("office").unwrap().unwrap();
+        let back = World::parse(&w.to_text()).unwrap();
+        assert_eq!(
+            (back.walls, back.path, back.walkers, back.start),
+            (w.walls, w.path, w.walkers, w.start)
+        );
     }
 
     #[test]

@@ -113,7 +113,8 @@ fn hover_hold_is_tight_and_a_push_moves_the_vehicle() {
     };
     let calm = run(&quiet, hold(&quiet, 10.0), &mut Discard).unwrap();
     assert_eq!(calm.status, Status::Completed);
-    assert!(calm.max_hold_error_m.unwrap() < 0.05, "{calm:?}");
+    // Motor mismatch (2 %) tilts the take-off a little until the integrator catches it.
+    assert!(calm.max_hold_error_m.unwrap() < 0.1, "{calm:?}");
     let pushed_cfg = SimConfig {
         pushes: vec![Push {
             start_s: 8.0,
@@ -123,7 +124,7 @@ fn hover_hold_is_tight_and_a_push_moves_the_vehicle() {
         ..quiet.clone()
     };
     let pushed = run(&pushed_cfg, hold(&pushed_cfg, 10.0), &mut Discard).unwrap();
-    assert!(pushed.max_hold_error_m.unwrap() > 0.1, "{pushed:?}");
+    assert!(pushed.max_hold_error_m.unwrap() > 0.25, "{pushed:?}");
     assert_eq!(pushed.status, Status::Completed, "the pilot recovers");
     let gusty = config("room", 1);
     let g = run(&gusty, hold(&gusty, 10.0), &mut Discard).unwrap();
