@@ -190,7 +190,7 @@ mod tests {
     }
 
     fn pose() -> impl Strategy<Value = Pose2> {
-        (-50.0f32..50.0, -50.0f32..50.0, -3.14f32..3.14).prop_map(|(x, y, t)| Pose2::new(x, y, t))
+        (-50.0f32..50.0, -50.0f32..50.0, -3.1f32..3.1).prop_map(|(x, y, t)| Pose2::new(x, y, t))
     }
 
     proptest! {

@@ -54,6 +54,8 @@ pub struct MatchConfig {
     pub search_half_window: u16,
     /// Neighbours closer than this share a local line (and PL-ICP segments are no longer), m.
     pub line_neighbour_m: f32,
+    /// A local line is fitted to neighbours spanning at least this far each side, m.
+    pub line_min_extent_m: f32,
     /// Smallest/largest spread of a local neighbourhood for it to count as a line.
     pub line_max_flatness: f32,
     /// Converged when an update moves less than these.
@@ -70,7 +72,8 @@ pub struct MatchConfig {
     /// A solution farther than this from the initial guess is reported as diverged.
     pub max_correction_m: f32,
     pub max_correction_rad: f32,
-    /// When a match fails or keeps fewer than `recovery_below_inlier_ratio` of its points, search
+    /// When a match fails, stops at the iteration limit or keeps fewer than
+    /// `recovery_below_inlier_ratio` of its points, search
     /// heading within +-`recovery_range_rad` in steps of `recovery_step_rad`, scoring points
     /// within `recovery_radius_m` of a reference point, and match again from the best.
     pub recovery: bool,
@@ -96,6 +99,7 @@ impl Default for MatchConfig {
             gate_sigmas: 4.0,
             search_half_window: 3,
             line_neighbour_m: 0.3,
+            line_min_extent_m: 0.1,
             line_max_flatness: 0.05,
             convergence_m: 1e-3,
             convergence_rad: 5e-4,

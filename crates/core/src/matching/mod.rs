@@ -64,7 +64,11 @@ impl<const N: usize> ScanMatcher<N> {
         self.has_reference = false;
         let slot = &mut self.slots[self.reference];
         slot.load(scan)?;
-        slot.fit_lines(self.config.line_neighbour_m, self.config.line_max_flatness);
+        slot.fit_lines(
+            self.config.line_neighbour_m,
+            self.config.line_max_flatness,
+            self.config.line_min_extent_m,
+        );
         self.has_reference = true;
         Ok(())
     }
@@ -73,7 +77,11 @@ impl<const N: usize> ScanMatcher<N> {
     pub fn promote_current(&mut self) {
         self.reference ^= 1;
         let slot = &mut self.slots[self.reference];
-        slot.fit_lines(self.config.line_neighbour_m, self.config.line_max_flatness);
+        slot.fit_lines(
+            self.config.line_neighbour_m,
+            self.config.line_max_flatness,
+            self.config.line_min_extent_m,
+        );
         self.has_reference = true;
     }
 
@@ -125,7 +133,10 @@ impl<const N: usize> ScanMatcher<N> {
         };
         let first = attempt(guess);
         let is_poor = |r: &Result<MatchResult, MatchError>| match r {
-            Ok(r) => r.quality.inlier_ratio < cfg.recovery_below_inlier_ratio,
+            Ok(r) => {
+                r.quality.inlier_ratio < cfg.recovery_below_inlier_ratio
+                    || r.quality.status == MatchStatus::IterationLimit
+            }
             Err(e) => matches!(
                 e,
                 MatchError::TooFewCorrespondences { .. } | MatchError::Diverged

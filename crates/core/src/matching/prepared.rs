@@ -59,8 +59,8 @@ impl<const N: usize> Default for PreparedScan<N> {
     }
 }
 
-/// Neighbours on each side used for a point's line fit.
-const LINE_HALF_WINDOW: usize = 2;
+/// Most neighbours on each side used for a point's line fit.
+const MAX_LINE_NEIGHBOURS: usize = 8;
 
 impl<const N: usize> PreparedScan<N> {
     /// Fills from a scan: valid beams only, bearings unwrapped. Lines are fitted separately by
@@ -95,30 +95,36 @@ impl<const N: usize> PreparedScan<N> {
         Ok(())
     }
 
-    /// Fits a local line to every point from up to two neighbours each side that lie within
-    /// `max_neighbour_m`; points on clutter or alone get no line.
-    pub fn fit_lines(&mut self, max_neighbour_m: f32, max_flatness: f32) {
+    /// Fits a local line to every point from its angular neighbours on each side, walking
+    /// outwards until they span `min_extent_m` (or `MAX_LINE_NEIGHBOURS` points, or a neighbour
+    /// farther than `max_neighbour_m`, a gap). A spatial extent, not a beam count, is what makes
+    /// the fit rise above range noise at every beam density; points on clutter or alone get none.
+    pub fn fit_lines(&mut self, max_neighbour_m: f32, max_flatness: f32, min_extent_m: f32) {
         let max2 = max_neighbour_m * max_neighbour_m;
+        let extent2 = min_extent_m * min_extent_m;
         for i in 0..self.len {
             let c = self.points[i];
             let (mut n, mut sx, mut sy) = (1.0f32, 0.0f32, 0.0f32);
             let (mut sxx, mut sxy, mut syy) = (0.0f32, 0.0f32, 0.0f32);
-            for k in 1..=LINE_HALF_WINDOW {
-                for j in [
-                    self.neighbour(i, -(k as isize)),
-                    self.neighbour(i, k as isize),
-                ]
-                .into_iter()
-                .flatten()
-                {
+            for side in [-1isize, 1] {
+                for k in 1..=MAX_LINE_NEIGHBOURS as isize {
+                    let Some(j) = self.neighbour(i, side * k) else {
+                        break;
+                    };
                     let d = self.points[j] - c;
-                    if d.norm_squared() <= max2 {
-                        n += 1.0;
-                        sx += d.x;
-                        sy += d.y;
-                        sxx += d.x * d.x;
-                        sxy += d.x * d.y;
-                        syy += d.y * d.y;
+                    let d2 = d.norm_squared();
+                    if d2 > max2 {
+                        break;
+                    }
+                    n += 1.0;
+                    sx += d.x;
+                    sy += d.y;
+                    sxx += d.x * d.x;
+                    sxy += d.x * d.y;
+                    syy += d.y * d.y;
+                    // Two neighbours a side at least, so a scan's end points still get a line.
+                    if d2 >= extent2 && k >= 2 {
+                        break;
                     }
                 }
             }
@@ -258,11 +264,11 @@ mod tests {
     use super::*;
     use crate::scan::Beam;
 
-    fn wall_scan() -> Scan<64> {
+    fn wall_scan() -> Scan<128> {
         // A wall at x = 2, seen from -60 to +60 degrees.
         let mut s = Scan::new(0.0);
-        for i in 0..61 {
-            let a = (-60.0f32 + 2.0 * i as f32).to_radians();
+        for i in 0..121 {
+            let a = (-60.0f32 + i as f32).to_radians();
             s.push(Beam::new(a, 2.0 / libm::cosf(a))).unwrap();
         }
         s
@@ -270,9 +276,9 @@ mod tests {
 
     #[test]
     fn wall_points_get_the_wall_normal() {
-        let mut p: PreparedScan<64> = PreparedScan::default();
+        let mut p: PreparedScan<128> = PreparedScan::default();
         p.load(&wall_scan()).unwrap();
-        p.fit_lines(0.5, 0.05);
+        p.fit_lines(0.5, 0.05, 0.1);
         for i in 0..p.len() {
             let n = p.line(i).normal;
             assert!(n.x.abs() > 0.999, "point {i}: {n:?}");
@@ -281,17 +287,17 @@ mod tests {
 
     #[test]
     fn projection_finds_the_beam_with_the_same_bearing() {
-        let mut p: PreparedScan<64> = PreparedScan::default();
+        let mut p: PreparedScan<128> = PreparedScan::default();
         p.load(&wall_scan()).unwrap();
-        let q = Vec2::new(1.5, 1.5 * libm::tanf(11.0f32.to_radians()));
-        let k = p.project(q, 0);
-        // Bearing 11 degrees lies between beams at 10 (index 35) and 12 (index 36).
-        assert_eq!(k, Some(36));
-        assert_eq!(p.project(q, 60), Some(36));
+        let q = Vec2::new(1.5, 1.5 * libm::tanf(10.5f32.to_radians()));
+        // Bearing 10.5 degrees lies between beams at 10 (index 70) and 11 (index 71).
+        assert_eq!(p.project(q, 0), Some(71));
+        assert_eq!(p.project(q, 120), Some(71));
         // Behind the sensor: outside a 120-degree field of view.
         assert_eq!(p.project(Vec2::new(-1.0, 0.1), 0), None);
-        let (j, _) = p.nearest_in_window(Vec2::new(2.0, 0.02), 30, 3).unwrap();
-        assert_eq!(j, 30);
+        // (2, 0.02) is nearer the 1-degree beam (index 61, y = 0.035) than the 0-degree one.
+        let (j, _) = p.nearest_in_window(Vec2::new(2.0, 0.02), 60, 3).unwrap();
+        assert_eq!(j, 61);
     }
 
     #[test]
