@@ -41,12 +41,15 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Grid cell edge, m: a few XV-11 beam footprints; small enough that a cell holds few walls.
-    pub const CELL_M: f64 = 0.5;
-
+    /// Builds the grid. The cell edge follows the wall density, about two walls' worth of
+    /// area per cell, between 0.25 m and 2 m: sparse rooms take few long steps, a rasterised
+    /// building with thousands of short walls gets small cells with few walls each.
     pub fn new(world: &World) -> Self {
         let [x0, y0, x1, y1] = world.bounds();
-        let cell = Self::CELL_M;
+        let area = ((x1 - x0) * (y1 - y0)).max(1.0);
+        let cell = (2.0 * area / world.walls.len().max(1) as f64)
+            .sqrt()
+            .clamp(0.25, 2.0);
         let origin = [x0 - cell, y0 - cell];
         let nx = (((x1 - origin[0]) / cell).ceil() as usize + 1).max(1);
         let ny = (((y1 - origin[1]) / cell).ceil() as usize + 1).max(1);
