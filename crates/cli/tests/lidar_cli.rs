@@ -297,3 +297,41 @@ fn record_starts_and_stops_a_urg_stream_and_decodes_its_reply() {
         (Some(1), Some(0))
     );
 }
+
+#[test]
+fn a_port_that_disappears_ends_the_recording_within_the_idle_timeout() {
+    let dir = tmp_dir("vanish");
+    let Some(socat) = socat_pair(&dir, "a_port_that_disappears") else {
+        return;
+    };
+    let args = format!(
+        "lidar record --device xv11 --port {} --duration 20 --idle-timeout 1 --json --out {}",
+        socat.b.display(),
+        dir.join("v.bin").display()
+    );
+    let rec = Command::new(BIN)
+        .args(args.split_whitespace())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    let bytes = std::fs::read(capture("hand_in_box.bin")).unwrap();
+    std::fs::write(&socat.a, &bytes[..20_000]).unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let gone = Instant::now();
+    drop(socat); // the port vanishes mid-stream
+    let out = rec.wait_with_output().unwrap();
+    assert!(
+        gone.elapsed() < Duration::from_secs(4),
+        "took {:?}",
+        gone.elapsed()
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if out.status.success() {
+        assert_eq!(last_json(&out)["stopped_by_silence"], true);
+        assert!(stderr.contains("recording ended early"), "{stderr}");
+    } else {
+        assert!(stderr.contains("read or write failed"), "{stderr}");
+    }
+}
