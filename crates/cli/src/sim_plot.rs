@@ -73,6 +73,23 @@ pub fn top_view(
     Ok(())
 }
 
+/// Heading in degrees without the jumps at ±180, so turns read as turns.
+fn unwrapped_yaw_deg(states: &[StateSample]) -> Vec<(f64, f64)> {
+    let mut offset = 0.0;
+    let mut prev: Option<f64> = None;
+    states
+        .iter()
+        .map(|s| {
+            let yaw = s.euler[2];
+            if let Some(p) = prev {
+                offset -= std::f64::consts::TAU * ((yaw - p) / std::f64::consts::TAU).round();
+            }
+            prev = Some(yaw);
+            (s.t_s, (yaw + offset).to_degrees())
+        })
+        .collect()
+}
+
 /// Three stacked panels: altitude (m), roll/pitch/yaw (deg), battery voltage (V).
 pub fn time_series(path: &Path, states: &[StateSample]) -> Result<(), Box<dyn Error>> {
     let root = BitMapBackend::new(path, (1200, 900)).into_drawing_area();
@@ -109,14 +126,7 @@ pub fn time_series(path: &Path, states: &[StateSample]) -> Result<(), Box<dyn Er
                         .map(|s| (s.t_s, s.euler[1].to_degrees()))
                         .collect(),
                 ),
-                (
-                    "yaw",
-                    BLUE,
-                    states
-                        .iter()
-                        .map(|s| (s.t_s, s.euler[2].to_degrees()))
-                        .collect(),
-                ),
+                ("yaw", BLUE, unwrapped_yaw_deg(states)),
             ],
         ),
         (

@@ -97,6 +97,14 @@ mod tests {
         )
     }
 
+    fn quiet_sonar_in_a_hall() -> (Sonar, Scene) {
+        let params = SonarParams {
+            noise_m: 0.0,
+            ..SonarParams::mb1040()
+        };
+        (Sonar::new(params, Rng::new(1)), scene())
+    }
+
     fn axes(roll: f64) -> [Vec3; 3] {
         let q = crate::math::Quat::from_euler(roll, 0.0, 0.0);
         [
@@ -108,14 +116,7 @@ mod tests {
 
     #[test]
     fn reads_height_in_whole_inches_at_20_hz() {
-        let mut sonar = Sonar::new(
-            SonarParams {
-                noise_m: 0.0,
-                ..SonarParams::mb1040()
-            },
-            Rng::new(1),
-        );
-        let s = scene();
+        let (mut sonar, s) = quiet_sonar_in_a_hall();
         let samples: Vec<_> = (0..1000)
             .filter_map(|i| {
                 sonar.sample(
@@ -138,14 +139,7 @@ mod tests {
 
     #[test]
     fn tilt_lengthens_the_reading_and_limits_clamp() {
-        let mut sonar = Sonar::new(
-            SonarParams {
-                noise_m: 0.0,
-                ..SonarParams::mb1040()
-            },
-            Rng::new(1),
-        );
-        let s = scene();
+        let (mut sonar, s) = quiet_sonar_in_a_hall();
         // Rolled 30 degrees at 1 m: the cone edge nearest vertical is 20 degrees off, 1/cos 20°.
         let r = sonar
             .sample(
