@@ -82,7 +82,6 @@ pub struct Forcing {
 /// The dynamics of one vehicle, constants precomputed.
 #[derive(Clone, Debug)]
 pub struct Dynamics {
-    mass: f64,
     inertia: Vec3,
     rotors: [Rotor; 4],
     /// Per-rotor k_T, with the motor mismatch applied.
@@ -90,8 +89,11 @@ pub struct Dynamics {
     moment_coeff: f64,
     rotor_inertia: f64,
     max_speed: f64,
-    motor_tau: f64,
-    rotor_tau: f64,
+    /// 1/τ of the two motor stages and 1/I, 1/m: the derivative runs four times a step.
+    inv_motor_tau: f64,
+    inv_rotor_tau: f64,
+    inv_inertia: Vec3,
+    inv_mass: f64,
     drag_linear: f64,
     drag_quadratic: f64,
     drag_rotational: f64,
@@ -101,23 +103,24 @@ impl Dynamics {
     /// `mismatch[i]` scales rotor i's thrust coefficient (1.0 = nominal).
     pub fn new(p: &VehicleParams, mismatch: [f64; 4]) -> Self {
         Self {
-            mass: p.mass_kg,
             inertia: p.inertia(),
             rotors: p.rotors(),
             thrust_coeff: mismatch.map(|m| p.thrust_coeff * m),
             moment_coeff: p.moment_coeff,
             rotor_inertia: p.rotor_inertia_kgm2,
             max_speed: p.max_rotor_speed_radps,
-            motor_tau: p.motor_tau_s,
-            rotor_tau: p.rotor_tau_s,
+            inv_motor_tau: 1.0 / p.motor_tau_s,
+            inv_rotor_tau: 1.0 / p.rotor_tau_s,
+            inv_inertia: Vec3::new(
+                1.0 / p.inertia_kgm2[0],
+                1.0 / p.inertia_kgm2[1],
+                1.0 / p.inertia_kgm2[2],
+            ),
+            inv_mass: 1.0 / p.mass_kg,
             drag_linear: p.drag_linear,
             drag_quadratic: p.drag_quadratic,
             drag_rotational: p.drag_rotational,
         }
-    }
-
-    pub fn mass(&self) -> f64 {
-        self.mass
     }
 
     /// Thrust of each rotor, τ_i = k_T Ω_i², N.
@@ -132,7 +135,7 @@ impl Dynamics {
 
     /// dΩ_i/dt of the second motor stage, rad/s².
     pub fn rotor_acceleration(&self, s: &BodyState, i: usize) -> f64 {
-        (self.max_speed * s.motor[i] - s.rotor_speed[i]) / self.rotor_tau
+        (self.max_speed * s.motor[i] - s.rotor_speed[i]) * self.inv_rotor_tau
     }
 
     /// Rotor inertia I_r, for the acceleration power of the rotors.
@@ -147,7 +150,8 @@ impl Dynamics {
         s.attitude.z_axis() * thrust + drag + f.force
     }
 
-    /// The time derivative of the state (seed 002 eqs. 13-19 and the motor model).
+    /// The time derivative of the state (seed 002 eqs. 13-19 and the motor model), for
+    /// commands already in 0..1.
     pub fn derivative(&self, s: &BodyState, f: &Forcing) -> BodyState {
         let mut d = BodyState::default();
         let mut thrust = 0.0;
@@ -155,8 +159,7 @@ impl Dynamics {
         let mut rotor_momentum = 0.0; // h_z = Σ s_i I_r Ω_i
         let mut rotor_momentum_rate = 0.0;
         for (i, rotor) in self.rotors.iter().enumerate() {
-            let cmd = f.command[i].clamp(0.0, 1.0);
-            d.motor[i] = (cmd - s.motor[i]) / self.motor_tau;
+            d.motor[i] = (f.command[i] - s.motor[i]) * self.inv_motor_tau;
             d.rotor_speed[i] = self.rotor_acceleration(s, i);
             let w2 = s.rotor_speed[i] * s.rotor_speed[i];
             let tau = self.thrust_coeff[i] * w2;
@@ -179,19 +182,20 @@ impl Dynamics {
             - w.cross(h)
             - Vec3::Z * rotor_momentum_rate
             - w * self.drag_rotational;
-        d.rate = Vec3::new(
-            net.x / self.inertia.x,
-            net.y / self.inertia.y,
-            net.z / self.inertia.z,
-        );
+        d.rate = net.scale(self.inv_inertia);
         d.position = s.velocity;
-        d.velocity = self.non_gravity_force(s, f, thrust) * (1.0 / self.mass) - Vec3::Z * GRAVITY;
+        d.velocity = self.non_gravity_force(s, f, thrust) * self.inv_mass - Vec3::Z * GRAVITY;
         d.attitude = s.attitude.derivative(w);
         d
     }
 
     /// One classical RK4 step of `dt` seconds; the quaternion is renormalised afterwards.
+    /// Commands are clamped to 0..1 here, once, before the four stages.
     pub fn step(&self, s: &BodyState, f: &Forcing, dt: f64) -> BodyState {
+        let f = &Forcing {
+            command: f.command.map(|c| c.clamp(0.0, 1.0)),
+            ..*f
+        };
         let k1 = self.derivative(s, f);
         let k2 = self.derivative(&s.add_scaled(&k1, 0.5 * dt), f);
         let k3 = self.derivative(&s.add_scaled(&k2, 0.5 * dt), f);
@@ -209,7 +213,7 @@ impl Dynamics {
     pub fn specific_force(&self, s: &BodyState, f: &Forcing) -> Vec3 {
         let thrust: f64 = self.thrusts(s).iter().sum();
         s.attitude
-            .rotate_inv(self.non_gravity_force(s, f, thrust) * (1.0 / self.mass))
+            .rotate_inv(self.non_gravity_force(s, f, thrust) * self.inv_mass)
     }
 }
 

@@ -148,6 +148,24 @@ impl Quat {
         v + t * self.w + u.cross(t)
     }
 
+    /// The body x, y and z axes in the world frame (the rotation matrix's columns).
+    pub fn axes(self) -> [Vec3; 3] {
+        let Quat { w, x, y, z } = self;
+        [
+            Vec3::new(
+                1.0 - 2.0 * (y * y + z * z),
+                2.0 * (x * y + w * z),
+                2.0 * (x * z - w * y),
+            ),
+            Vec3::new(
+                2.0 * (x * y - w * z),
+                1.0 - 2.0 * (x * x + z * z),
+                2.0 * (y * z + w * x),
+            ),
+            self.z_axis(),
+        ]
+    }
+
     /// The body z axis in the world frame (the thrust direction), cheaper than `rotate(Z)`.
     pub fn z_axis(self) -> Vec3 {
         let Quat { w, x, y, z } = self;
@@ -238,6 +256,10 @@ mod tests {
             .rotate(Vec3::new(1.0, 0.0, 0.0));
         assert!((v.x).abs() < 1e-12 && (v.y - 1.0).abs() < 1e-12);
         assert!((q.z_axis() - q.rotate(Vec3::Z)).norm() < 1e-12);
+        let [ax, ay, az] = q.axes();
+        assert!((ax - q.rotate(Vec3::new(1.0, 0.0, 0.0))).norm() < 1e-12);
+        assert!((ay - q.rotate(Vec3::new(0.0, 1.0, 0.0))).norm() < 1e-12);
+        assert!((az - q.rotate(Vec3::Z)).norm() < 1e-12);
         let back = q.rotate_inv(q.rotate(Vec3::new(0.3, -1.0, 2.0)));
         assert!((back - Vec3::new(0.3, -1.0, 2.0)).norm() < 1e-12);
     }

@@ -116,7 +116,7 @@ pub enum Pilot {
 }
 
 /// Rate of the test pilot, Hz.
-const TEST_PILOT_HZ: f64 = 500.0;
+const TEST_PILOT_HZ: f64 = 250.0;
 /// Rate of collision checks, gust updates and people motion, Hz.
 const SLOW_HZ: f64 = 100.0;
 /// Clearance is searched only this far (grid cells around the vehicle), m.
@@ -387,13 +387,10 @@ pub fn run(
         }
 
         // Sensors.
-        let axes = [
-            s.attitude.rotate(Vec3::new(1.0, 0.0, 0.0)),
-            s.attitude.rotate(Vec3::new(0.0, 1.0, 0.0)),
-            s.attitude.rotate(Vec3::Z),
-        ];
+        let axes = s.attitude.axes();
         let accel = (s.velocity - before.velocity) * hz + Vec3::Z * GRAVITY;
-        if let Some(sample) = imu.sample(t, s.rate, s.attitude.rotate_inv(accel)) {
+        let specific_force = Vec3::new(axes[0].dot(accel), axes[1].dot(accel), axes[2].dot(accel));
+        if let Some(sample) = imu.sample(t, s.rate, specific_force) {
             recorder.imu(&sample);
             if matches!(pilot, Pilot::Onboard(_)) {
                 imu_buf.push(sample);
