@@ -65,12 +65,15 @@ fn decode_writes_a_carmen_log_that_reads_back() {
         .map(|r| r.valid.iter().filter(|v| !**v).count() as u64)
         .sum();
     assert_eq!(serde_json::Value::from(invalid), s["invalid_beams"]);
-    // Stamped by byte position at 115200 baud (11520 bytes/s): revolution 60 is the one opened by
-    // packet 0 at byte 6 + 22 * (32 + 59 * 90).
-    assert_eq!(
-        back.scans[60].timestamp_text,
-        format!("{:.6}", (6 + 22 * (32 + 59 * 90)) as f64 / 11520.0)
-    );
+    // Stamped by the device's own rate: one revolution lasts 60 / RPM, so the steady part
+    // (about 297 RPM) advances 0.202 s a scan and revolution 60 starts about 12 s in, not the
+    // 10.2 s that the 115200-baud line rate would claim (the XV-11 pauses between packets).
+    let t: Vec<f64> = back.scans.iter().map(|r| r.timestamp_s).collect();
+    assert!((11.8..12.3).contains(&t[60]), "t60 {}", t[60]);
+    assert!(t[10..100]
+        .windows(2)
+        .all(|w| (0.195..0.21).contains(&(w[1] - w[0]))));
+    assert!(t.windows(2).all(|w| w[1] >= w[0]));
     assert!((back.scans[0].start_angle_rad + 179f32.to_radians()).abs() < 1e-5);
 }
 

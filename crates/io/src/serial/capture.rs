@@ -34,9 +34,10 @@ impl DecodeSummary {
     }
 }
 
-/// Decodes a whole capture. Records are stamped by byte position at `baud` (10 bits a byte on
-/// an 8N1 line): captures carry no clock, and the device streams continuously, so this is the
-/// time since the capture began, to within the device's own pauses.
+/// Decodes a whole capture and stamps its records. Captures carry no clock, so a record's time
+/// is the device's own clock where it sends one (URG), and otherwise the bytes before it at the
+/// device's data rate (`DecodedScan::bytes_per_s`, each revolution at its own RPM), falling back
+/// to the line rate at `baud` (10 bits a byte) for devices that give no rate (old XV-11).
 pub fn decode_capture(
     device: Device,
     bytes: &[u8],
@@ -45,9 +46,13 @@ pub fn decode_capture(
     let mut decoder = DeviceDecoder::new(device);
     let mut scans: Vec<DecodedScan> = bytes.iter().filter_map(|&b| decoder.push(b)).collect();
     scans.extend(decoder.finish());
-    let bytes_per_s = f64::from(baud.max(1)) / 10.0;
+    let line_rate = f64::from(baud.max(1)) / 10.0;
+    let (mut t, mut last_offset, mut rate) = (0.0, 0, line_rate);
     for s in &mut scans {
-        s.stamp(s.first_offset as f64 / bytes_per_s);
+        t += s.first_offset.saturating_sub(last_offset) as f64 / rate;
+        last_offset = s.first_offset;
+        rate = s.bytes_per_s.filter(|r| *r > 0.0).unwrap_or(line_rate);
+        s.stamp(s.device_time_s.unwrap_or(t));
     }
     let summary = DecodeSummary::new(&scans, decoder.stats());
     (scans, summary)
@@ -63,6 +68,8 @@ mod tests {
             record: crate::carmen::LaserRecord::new(0.0, 0.0, 0.1, 5.0, vec![1.0, 0.0]),
             rpm,
             first_offset: 0,
+            bytes_per_s: None,
+            device_time_s: None,
         };
         let s = DecodeSummary::new(
             &[scan(Some(3.0)), scan(Some(1.0)), scan(None)],

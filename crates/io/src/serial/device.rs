@@ -94,8 +94,14 @@ pub struct DecodedScan {
     pub record: LaserRecord,
     pub rpm: Option<f32>,
     /// Stream offset of the revolution's first byte (XV-11), or of the byte that completed it
-    /// (URG, RPLIDAR, whose decoders keep no offsets); with the baud rate, a clock for captures.
+    /// (URG, RPLIDAR, whose decoders keep no offsets): with a data rate, a clock for captures.
     pub first_offset: u64,
+    /// The device's own data rate while sending this revolution, where the stream fixes it: the
+    /// XV-11 sends 90 packets of 22 bytes a turn (33 bytes/s per RPM), an RPLIDAR 5 bytes a
+    /// sample. A device may pause between bytes, so the line rate (baud / 10) overestimates it.
+    pub bytes_per_s: Option<f64>,
+    /// The device's own clock for this scan (the URG's millisecond timestamp), seconds.
+    pub device_time_s: Option<f64>,
 }
 
 impl DecodedScan {
@@ -113,6 +119,8 @@ impl DecodedScan {
 /// XV-11 distances are 14 bits: every encodable reading is below this, so CARMEN's "invalid
 /// is written as max range" survives a round trip.
 const XV11_MAX_RANGE_M: f32 = 16.384;
+/// 90 packets of 22 bytes.
+const XV11_BYTES_PER_TURN: f64 = 1980.0;
 
 fn record_from_scan<const N: usize>(
     scan: &Scan<N>,
@@ -144,6 +152,10 @@ fn from_xv11(rev: Revolution) -> DecodedScan {
         record,
         rpm: rev.rpm(),
         first_offset: rev.first_offset,
+        bytes_per_s: rev
+            .rpm()
+            .map(|rpm| XV11_BYTES_PER_TURN * f64::from(rpm) / 60.0),
+        device_time_s: None,
     }
 }
 
@@ -158,6 +170,8 @@ fn from_urg(scan: ScipScan<URG_STEPS>, offset: u64) -> DecodedScan {
         record,
         rpm: Some(60.0 / cfg.scan_period_s),
         first_offset: offset,
+        bytes_per_s: None,
+        device_time_s: Some(f64::from(scan.timestamp_ms) / 1000.0),
     }
 }
 
@@ -192,6 +206,8 @@ fn from_rplidar(rev: RplidarRevolution<RPLIDAR_NODES>, offset: u64) -> DecodedSc
         record,
         rpm: rev.rpm(&cfg),
         first_offset: offset,
+        bytes_per_s: Some(5.0 / f64::from(cfg.sample_period_s)),
+        device_time_s: None,
     }
 }
 

@@ -99,7 +99,8 @@ pub fn record(
     let mut buf = [0u8; 4096];
     let mut total: u64 = 0;
     let mut emit = |mut scan: DecodedScan, total: u64, scans: &mut Vec<DecodedScan>| {
-        scan.stamp(now_s() - (total - scan.first_offset) as f64 / bytes_per_s);
+        let rate = scan.bytes_per_s.filter(|r| *r > 0.0).unwrap_or(bytes_per_s);
+        scan.stamp(now_s() - (total - scan.first_offset) as f64 / rate);
         on_scan(&scan).map_err(RecordError::Write)?;
         scans.push(scan);
         Ok(())
