@@ -7,7 +7,10 @@ fuzz_target!(|data: &[u8]| {
     let mut d = ScipDecoder::<769>::new();
     for &b in data {
         if let Some(scan) = d.push(b) {
-            assert_eq!(scan.to_scan(&UrgConfig::URG_04LX).len(), scan.ranges_mm().len());
+            assert_eq!(
+                scan.to_scan(&UrgConfig::URG_04LX).len(),
+                scan.ranges_mm().len()
+            );
         }
     }
 });
