@@ -156,13 +156,14 @@ impl Recorder for Collector {
         rec.timestamp_text = stamp(scan.stamp_s);
         let r = write_robotlaser1(&mut f.clf, &rec, "plumbline-sim").and_then(|_| {
             let p = truth.position;
+            // `+ 0.0` turns an exact -0.0 heading into 0.0 so the file does not print "-0.000000".
             writeln!(
                 f.truth,
                 "{} {:.6} {:.6} {:.6}",
                 rec.timestamp_text,
                 p.x,
                 p.y,
-                truth.attitude.yaw()
+                truth.attitude.yaw() + 0.0
             )
         });
         f.poses.push(*truth);
