@@ -133,6 +133,14 @@ fn dump(name: &str, pairs: &[(Scan<N>, Scan<N>)]) -> PathBuf {
 fn main() {
     // `cargo bench` passes --bench; `cargo test --benches` passes nothing and only wants it to run.
     let quick = !std::env::args().any(|a| a == "--bench");
+    // Optional filters: `cargo bench --bench matching -- icl office-360` times only the rows whose
+    // pair set or matcher is named by every filter word.
+    let filters: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let wanted =
+        |name: &str, kind: MatcherKind| filters.iter().all(|f| f == name || f == kind.name());
     let (real_name, mut real) = real_pairs();
     let mut sets = vec![
         (real_name, real.clone()),
@@ -151,6 +159,9 @@ fn main() {
         for kind in MatcherKind::ALL {
             if kind == MatcherKind::IclPaper && name.contains("1440") {
                 continue; // O(N²) by design; minutes per run at 1440 beams.
+            }
+            if !wanted(name, kind) {
+                continue;
             }
             let (median, p99, failed) = time_pairs(kind, pairs);
             println!(

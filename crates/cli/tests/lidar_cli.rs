@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 const BIN: &str = env!("CARGO_BIN_EXE_plumbline");
 const CAPTURES: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/captures/neato-xv11"
+    "/../../data/captures/neato-xv11"
 );
 
 fn capture(name: &str) -> PathBuf {

@@ -14,7 +14,7 @@ use std::hint::black_box;
 
 const CAPTURES: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/captures/neato-xv11"
+    "/../../data/captures/neato-xv11"
 );
 
 fn read(name: &str) -> Vec<u8> {

@@ -1,5 +1,5 @@
 //! The real XV-11 capture `hand_in_box.bin` (firmware >= 2.4) through the decoder, with the
-//! counts found independently (see `shared/data/captures/neato-xv11/SOURCE.md`).
+//! counts found independently (see `data/captures/neato-xv11/SOURCE.md`).
 
 use plumbline_core::lidar::xv11_revolution::{Revolution, Xv11Decoder};
 use plumbline_core::lidar::DecodeStats;

@@ -1,6 +1,6 @@
 //! Neato XV-11 LDS, firmware 2.4 and later: the 22-byte `0xFA` packet.
 //!
-//! Layout (see `shared/data/captures/neato-xv11/SOURCE.md`): `FA idx spdL spdH`, four 4-byte
+//! Layout (see `data/captures/neato-xv11/SOURCE.md`): `FA idx spdL spdH`, four 4-byte
 //! readings, `chkL chkH`. `idx` is `0xA0 + k` for packet k of 90 in a revolution; packet k holds
 //! the readings at k*4 .. k*4+3 degrees, clockwise. Speed is u16 LE in 1/64 RPM.
 

@@ -4,7 +4,7 @@ use plumbline_core::lidar::{ByteDecoder, DecodeStats};
 
 pub const CAPTURES: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/captures/neato-xv11"
+    "/../../data/captures/neato-xv11"
 );
 
 /// A capture's bytes; the path in the panic message when it is missing.
