@@ -14,6 +14,7 @@ pub mod disturb;
 pub mod dynamics;
 pub mod math;
 pub mod occupancy;
+pub mod onboard_link;
 pub mod pilot;
 pub mod plan;
 pub mod power;

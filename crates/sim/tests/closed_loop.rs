@@ -2,158 +2,52 @@
 //! mixer, modes and failsafes) flying the simulated vehicle through the runner's
 //! `FlightSoftware` interface. Seed 000 Fig. 8-9: ICL displacement drives the hold.
 
-use plumbline_core::control::airframe::Airframe;
-use plumbline_core::flight::autopilot::AutopilotConfig;
-use plumbline_core::flight::onboard::Onboard;
 use plumbline_core::matching::OdometryConfig;
-use plumbline_core::msgs::{
-    FailsafeReason, FlightMode, FrameKind, Inputs, MotorCommands, PilotInput,
-};
-use plumbline_core::scan::{Beam, Scan};
+use plumbline_core::msgs::{FailsafeReason, FlightMode};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
-use plumbline_sim::runner::{
-    run, FlightSoftware, Pilot, Recorder, SensorFrame, SimConfig, StateSample, Status,
-};
-use plumbline_sim::sensors::lidar::{LidarProfile, LidarScan};
-use plumbline_sim::vehicle::{Frame, VehicleParams};
+use plumbline_sim::onboard_link::{autopilot_for, FlightLog, OnboardLink, Script, XV11_BEAMS};
+use plumbline_sim::runner::{run, Pilot, Recorder, SimConfig, StateSample, Status};
+use plumbline_sim::sensors::lidar::LidarProfile;
 use plumbline_sim::world::World;
-use std::cell::RefCell;
-use std::rc::Rc;
 
-/// Beams the onboard scans can hold (the XV-11's 360).
-const BEAMS: usize = 360;
-
-/// The autopilot configured for a simulated vehicle: its airframe in the onboard terms.
-fn autopilot_for(v: &VehicleParams) -> AutopilotConfig {
-    let frame = match v.frame {
-        Frame::X => FrameKind::X,
-        Frame::Plus => FrameKind::Plus,
-    };
-    AutopilotConfig::for_airframe(&Airframe {
-        frame,
-        mass_kg: v.mass_kg as f32,
-        inertia_kgm2: v.inertia_kgm2.map(|i| i as f32),
-        arm_length_m: v.arm_length_m as f32,
-        max_thrust_n: (v.thrust_coeff * v.max_rotor_speed_radps * v.max_rotor_speed_radps) as f32,
-        yaw_moment_per_thrust_m: (v.moment_coeff / v.thrust_coeff) as f32,
-    })
-}
-
-/// What the test wants to see after the run.
-#[derive(Default)]
+/// What the test wants to see after the run: the stack's own log and the ground truth.
 struct Log {
-    modes: Vec<(f64, FlightMode)>,
-    failsafe: Option<FailsafeReason>,
-    /// Onboard estimate of the horizontal position, for drift checks (estimate frame).
-    last_estimate: [f32; 3],
+    onboard: FlightLog,
     truth: Vec<StateSample>,
 }
 
-/// The onboard stack behind the runner's interface, with a scripted pilot.
-struct Stack {
-    onboard: Box<Onboard<BEAMS>>,
-    /// (time, arm switch) changes.
-    arm_script: Vec<(f64, bool)>,
-    /// Stop the lidar from this time on (lidar failure).
-    lidar_dies_at_s: Option<f64>,
-    last_imu: plumbline_core::msgs::ImuSample,
-    log: Rc<RefCell<Log>>,
-}
-
-/// The simulator's revolution as an onboard scan; the device's validity flags are kept.
-fn to_scan(s: &LidarScan) -> Scan<BEAMS> {
-    let mut scan = Scan::new(s.stamp_s);
-    for (k, (&r, &ok)) in s.ranges_m.iter().zip(&s.valid).take(BEAMS).enumerate() {
-        let angle = (s.start_angle_rad + s.increment_rad * k as f64) as f32;
-        let beam = if ok {
-            Beam::new(angle, r)
-        } else {
-            Beam::invalid(angle)
-        };
-        // At most BEAMS beams are taken, so the scan cannot be full.
-        let _ = scan.push(beam);
-    }
-    scan
-}
-
-impl FlightSoftware for Stack {
-    fn rate_hz(&self) -> f64 {
-        500.0
-    }
-
-    fn step(&mut self, frame: &SensorFrame<'_>, dt_s: f64) -> MotorCommands {
-        if let Some(s) = frame.imu.last() {
-            self.last_imu = *s;
-        }
-        let arm = self
-            .arm_script
-            .iter()
-            .rev()
-            .find(|(t, _)| *t <= frame.t_s)
-            .is_some_and(|(_, a)| *a);
-        let lidar_alive = self.lidar_dies_at_s.is_none_or(|t| frame.t_s < t);
-        let scan = frame.scans.last().filter(|_| lidar_alive).map(to_scan);
-        let inputs = Inputs {
-            t_s: frame.t_s,
-            imu: self.last_imu,
-            sonar: frame.sonar,
-            scan_match: None,
-            battery: Some(frame.battery),
-            pilot: PilotInput {
-                arm,
-                ..PilotInput::default()
-            },
-        };
-        let out = self.onboard.step(&inputs, scan.as_ref(), dt_s as f32);
-        let mut log = self.log.borrow_mut();
-        if log.modes.last().is_none_or(|(_, m)| *m != out.mode) {
-            log.modes.push((frame.t_s, out.mode));
-        }
-        log.failsafe = out.failsafe.or(log.failsafe);
-        log.last_estimate = out.estimate.position_m;
-        out.motors
-    }
-}
-
-struct Truth(Rc<RefCell<Log>>);
+#[derive(Default)]
+struct Truth(Vec<StateSample>);
 
 impl Recorder for Truth {
     fn state(&mut self, s: &StateSample) {
-        self.0.borrow_mut().truth.push(*s);
+        self.0.push(*s);
     }
 }
 
-fn fly(
-    config: &SimConfig,
-    arm_script: Vec<(f64, bool)>,
-    lidar_dies_at_s: Option<f64>,
-) -> (Status, Rc<RefCell<Log>>) {
-    fly_with(
-        config,
-        autopilot_for(&config.vehicle),
-        arm_script,
+fn fly(config: &SimConfig, arm: Vec<(f64, bool)>, lidar_dies_at_s: Option<f64>) -> (Status, Log) {
+    let script = Script {
+        arm,
         lidar_dies_at_s,
-    )
-}
-
-fn fly_with(
-    config: &SimConfig,
-    autopilot: AutopilotConfig,
-    arm_script: Vec<(f64, bool)>,
-    lidar_dies_at_s: Option<f64>,
-) -> (Status, Rc<RefCell<Log>>) {
-    let log = Rc::new(RefCell::new(Log::default()));
-    let stack = Stack {
-        onboard: Box::new(Onboard::new(OdometryConfig::default(), autopilot)),
-        arm_script,
-        lidar_dies_at_s,
-        last_imu: Default::default(),
-        log: log.clone(),
     };
-    let mut truth = Truth(log.clone());
-    let out = run(config, Pilot::Onboard(Box::new(stack)), &mut truth).unwrap();
-    (out.status, log)
+    let (link, log) = OnboardLink::<XV11_BEAMS>::new(
+        &config.lidar,
+        OdometryConfig::default(),
+        autopilot_for(&config.vehicle),
+        script,
+    )
+    .unwrap();
+    let mut truth = Truth::default();
+    let out = run(config, Pilot::Onboard(Box::new(link)), &mut truth).unwrap();
+    let onboard = log.borrow().clone();
+    (
+        out.status,
+        Log {
+            onboard,
+            truth: truth.0,
+        },
+    )
 }
 
 fn room(seed: u64) -> SimConfig {
@@ -195,8 +89,7 @@ fn holds_over_the_start_through_a_push_and_lands() {
     let c = pushed_room(11, 15.0, 34.0);
     let start = [c.world.start[0], c.world.start[1]];
     let (status, log) = fly(&c, vec![(0.5, true), (25.0, false)], None);
-    let log = log.borrow();
-    println!("modes {:?}", log.modes);
+    println!("modes {:?}", log.onboard.modes);
     assert_eq!(status, Status::Completed);
     let (rms, max) = hold_error(&log, start, 8.0, 15.0);
     let err = |s: &StateSample| (s.position.x - start[0]).hypot(s.position.y - start[1]);
@@ -222,7 +115,7 @@ fn holds_over_the_start_through_a_push_and_lands() {
     // keyframe match made meanwhile leaves the estimate a few centimetres off, which the hold
     // then faithfully flies. Over seeds 20..28 the figure was 6-13 cm.
     assert!(rms_after < 0.15, "rms after the push {rms_after}");
-    let modes: Vec<FlightMode> = log.modes.iter().map(|m| m.1).collect();
+    let modes: Vec<FlightMode> = log.onboard.modes.iter().map(|m| m.1).collect();
     use FlightMode::*;
     assert_eq!(modes, vec![Disarmed, Takeoff, Hold, Land, Disarmed]);
 }
@@ -232,11 +125,10 @@ fn lidar_failure_holds_then_lands() {
     let mut c = room(12);
     c.max_duration_s = 25.0;
     let (status, log) = fly(&c, vec![(0.5, true)], Some(10.0));
-    let log = log.borrow();
-    println!("modes {:?}", log.modes);
+    println!("modes {:?}", log.onboard.modes);
     assert_eq!(status, Status::Completed);
-    assert_eq!(log.failsafe, Some(FailsafeReason::LidarLost));
-    assert_eq!(log.modes.last().unwrap().1, FlightMode::Disarmed);
+    assert_eq!(log.onboard.failsafe, Some(FailsafeReason::LidarLost));
+    assert_eq!(log.onboard.final_mode(), FlightMode::Disarmed);
 }
 
 /// Twenty seeds of the hold with seed 000's push: none may crash, and the hold error before
@@ -252,7 +144,7 @@ fn twenty_seeds_of_hold_and_push_do_not_crash() {
             crashes.push((seed, status));
             continue;
         }
-        rms_sum += hold_error(&log.borrow(), start, 8.0, 20.0).0;
+        rms_sum += hold_error(&log, start, 8.0, 20.0).0;
         flown += 1;
     }
     let mean_rms = rms_sum / flown.max(1) as f64;

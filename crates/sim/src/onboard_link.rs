@@ -1,0 +1,253 @@
+//! The onboard flight stack of `plumbline-core` ([`Onboard`]: lidar odometry, EKF, cascaded
+//! PID, mixer, modes and failsafes) behind the runner's [`FlightSoftware`] interface, with a
+//! scripted pilot and lidar failure injection (issue 4's scenarios).
+//!
+//! The runner consumes the flight software, so what the stack did (modes, failsafes, its
+//! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
+//! to. The runner never hands the stack ground truth; the log holds only onboard values.
+
+use crate::runner::{FlightSoftware, SensorFrame, SetupError, STATE_RATE_HZ};
+use crate::sensors::lidar::{LidarProfile, LidarScan};
+use crate::vehicle::{Frame, VehicleParams};
+use plumbline_core::control::airframe::Airframe;
+use plumbline_core::flight::autopilot::AutopilotConfig;
+use plumbline_core::flight::onboard::Onboard;
+use plumbline_core::matching::OdometryConfig;
+use plumbline_core::msgs::{
+    EstimatedState, FailsafeReason, FlightMode, FrameKind, ImuSample, Inputs, MotorCommands,
+    PilotInput,
+};
+use plumbline_core::scan::{Beam, Scan};
+use std::cell::RefCell;
+use std::rc::Rc;
+
+/// Onboard scan capacity for the XV-11 (360 beams): the smallest stack, as flown on hardware.
+pub const XV11_BEAMS: usize = 360;
+/// Onboard scan capacity for the Hokuyos (URG-04LX 667, UTM-30LX 1,081 beams), with room for
+/// a 0.25-degree full-circle scanner.
+pub const LARGE_SCAN_BEAMS: usize = 1440;
+
+/// Rate the onboard loop runs at, Hz (the IMU's rate, so every step sees a fresh sample).
+pub const ONBOARD_RATE_HZ: f64 = 500.0;
+
+/// The autopilot configured for a simulated vehicle: its airframe in the onboard terms.
+pub fn autopilot_for(v: &VehicleParams) -> AutopilotConfig {
+    let frame = match v.frame {
+        Frame::X => FrameKind::X,
+        Frame::Plus => FrameKind::Plus,
+    };
+    AutopilotConfig::for_airframe(&Airframe {
+        frame,
+        mass_kg: v.mass_kg as f32,
+        inertia_kgm2: v.inertia_kgm2.map(|i| i as f32),
+        arm_length_m: v.arm_length_m as f32,
+        max_thrust_n: (v.thrust_coeff * v.max_rotor_speed_radps * v.max_rotor_speed_radps) as f32,
+        yaw_moment_per_thrust_m: (v.moment_coeff / v.thrust_coeff) as f32,
+    })
+}
+
+/// What the pilot and the fault injector do during a run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Script {
+    /// (time, arm switch) changes; the switch is off before the first one.
+    pub arm: Vec<(f64, bool)>,
+    /// The lidar stops delivering revolutions from this time on.
+    pub lidar_dies_at_s: Option<f64>,
+}
+
+/// The onboard outputs at one instant, sampled at the runner's [`STATE_RATE_HZ`] for plots.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OnboardSample {
+    pub t_s: f64,
+    pub mode: FlightMode,
+    pub estimate: EstimatedState,
+    pub motors: [f32; 4],
+}
+
+/// What the onboard stack did during a run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FlightLog {
+    /// Every mode change, with its time.
+    pub modes: Vec<(f64, FlightMode)>,
+    /// The most recent failsafe reason reported, kept after the failsafe clears.
+    pub failsafe: Option<FailsafeReason>,
+    /// The estimate after the last step (estimate frame: origin and heading at power-up).
+    pub last_estimate: EstimatedState,
+    pub samples: Vec<OnboardSample>,
+    /// Scan points the matcher's dynamic-object test rejected (seed 000 sec. 4.2).
+    pub rejected_points: u64,
+    /// Sum over Hold steps and motors of the squared rate of change of the command, 1/s^2.
+    jitter_sum: f64,
+    jitter_terms: u64,
+    previous_motors: Option<[f32; 4]>,
+}
+
+impl FlightLog {
+    /// RMS rate of change of the motor commands while holding, 1/s (DESIGN.md §6 "control
+    /// jitter"). Only Hold counts, so takeoff and landing ramps do not mask how busy the
+    /// controller is on station. `None` when the vehicle never held.
+    pub fn motor_jitter(&self) -> Option<f64> {
+        (self.jitter_terms > 0).then(|| (self.jitter_sum / self.jitter_terms as f64).sqrt())
+    }
+
+    /// The mode at the end of the run.
+    pub fn final_mode(&self) -> FlightMode {
+        self.modes.last().map_or(FlightMode::Disarmed, |m| m.1)
+    }
+
+    fn record(&mut self, dt_s: f64, mode: FlightMode, motors: [f32; 4]) {
+        if let (FlightMode::Hold, Some(prev)) = (mode, self.previous_motors) {
+            if dt_s > 0.0 {
+                for (now, before) in motors.iter().zip(prev) {
+                    let rate = f64::from(now - before) / dt_s;
+                    self.jitter_sum += rate * rate;
+                    self.jitter_terms += 1;
+                }
+            }
+        }
+        self.previous_motors = Some(motors);
+    }
+}
+
+/// [`Onboard`] for scans of up to `N` beams, flown by a [`Script`].
+pub struct OnboardLink<const N: usize> {
+    onboard: Box<Onboard<N>>,
+    script: Script,
+    /// The newest IMU sample; the runner calls at the IMU's rate, so it is rarely stale.
+    last_imu: ImuSample,
+    next_sample_s: f64,
+    log: Rc<RefCell<FlightLog>>,
+}
+
+impl<const N: usize> OnboardLink<N> {
+    /// A stack for `lidar`'s scans; fails when a revolution has more beams than `N`, rather
+    /// than flying on silently truncated scans.
+    pub fn new(
+        lidar: &LidarProfile,
+        odometry: OdometryConfig,
+        autopilot: AutopilotConfig,
+        script: Script,
+    ) -> Result<(Self, Rc<RefCell<FlightLog>>), SetupError> {
+        if lidar.beams > N {
+            return Err(SetupError::Config(format!(
+                "lidar {} has {} beams; the onboard stack holds {N}",
+                lidar.name, lidar.beams
+            )));
+        }
+        let log = Rc::new(RefCell::new(FlightLog::default()));
+        let link = Self {
+            onboard: Box::new(Onboard::new(odometry, autopilot)),
+            script,
+            last_imu: ImuSample::default(),
+            next_sample_s: 0.0,
+            log: log.clone(),
+        };
+        Ok((link, log))
+    }
+}
+
+/// The simulator's revolution as an onboard scan; the device's validity flags are kept.
+fn to_scan<const N: usize>(s: &LidarScan) -> Scan<N> {
+    let mut scan = Scan::new(s.stamp_s);
+    for (k, (&r, &ok)) in s.ranges_m.iter().zip(&s.valid).take(N).enumerate() {
+        let angle = (s.start_angle_rad + s.increment_rad * k as f64) as f32;
+        let beam = if ok {
+            Beam::new(angle, r)
+        } else {
+            Beam::invalid(angle)
+        };
+        // At most N beams are taken (and `new` checked the profile), so the scan cannot be full.
+        let _ = scan.push(beam);
+    }
+    scan
+}
+
+impl<const N: usize> FlightSoftware for OnboardLink<N> {
+    fn rate_hz(&self) -> f64 {
+        ONBOARD_RATE_HZ
+    }
+
+    fn step(&mut self, frame: &SensorFrame<'_>, dt_s: f64) -> MotorCommands {
+        if let Some(s) = frame.imu.last() {
+            self.last_imu = *s;
+        }
+        let arm = self
+            .script
+            .arm
+            .iter()
+            .rev()
+            .find(|(t, _)| *t <= frame.t_s)
+            .is_some_and(|(_, a)| *a);
+        let lidar_alive = self.script.lidar_dies_at_s.is_none_or(|t| frame.t_s < t);
+        let scan = frame.scans.last().filter(|_| lidar_alive).map(to_scan::<N>);
+        let inputs = Inputs {
+            t_s: frame.t_s,
+            imu: self.last_imu,
+            sonar: frame.sonar,
+            scan_match: None,
+            battery: Some(frame.battery),
+            pilot: PilotInput {
+                arm,
+                ..PilotInput::default()
+            },
+        };
+        let out = self.onboard.step(&inputs, scan.as_ref(), dt_s as f32);
+        let mut log = self.log.borrow_mut();
+        if log.modes.last().is_none_or(|(_, m)| *m != out.mode) {
+            log.modes.push((frame.t_s, out.mode));
+        }
+        log.failsafe = out.failsafe.or(log.failsafe);
+        log.last_estimate = out.estimate;
+        log.rejected_points = self.onboard.rejected_points();
+        log.record(dt_s, out.mode, out.motors.throttle_norm);
+        if frame.t_s >= self.next_sample_s {
+            self.next_sample_s = frame.t_s + 1.0 / STATE_RATE_HZ;
+            log.samples.push(OnboardSample {
+                t_s: frame.t_s,
+                mode: out.mode,
+                estimate: out.estimate,
+                motors: out.motors.throttle_norm,
+            });
+        }
+        out.motors
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_scan_larger_than_the_stack_is_refused() {
+        let v = VehicleParams::f450();
+        let script = Script::default();
+        let small = OnboardLink::<XV11_BEAMS>::new(
+            &LidarProfile::utm30lx(),
+            OdometryConfig::default(),
+            autopilot_for(&v),
+            script.clone(),
+        );
+        assert!(matches!(small, Err(SetupError::Config(m)) if m.contains("1081")));
+        for lidar in [LidarProfile::urg04lx(), LidarProfile::utm30lx()] {
+            let large = OnboardLink::<LARGE_SCAN_BEAMS>::new(
+                &lidar,
+                OdometryConfig::default(),
+                autopilot_for(&v),
+                script.clone(),
+            );
+            assert!(large.is_ok(), "{}", lidar.name);
+        }
+    }
+
+    #[test]
+    fn jitter_counts_only_hold_steps() {
+        let mut log = FlightLog::default();
+        log.record(0.002, FlightMode::Takeoff, [0.0; 4]);
+        log.record(0.002, FlightMode::Takeoff, [0.5; 4]);
+        assert_eq!(log.motor_jitter(), None);
+        // Each motor moves 0.001 in 2 ms: 0.5 per second.
+        log.record(0.002, FlightMode::Hold, [0.501; 4]);
+        let j = log.motor_jitter().unwrap();
+        assert!((j - 0.5).abs() < 1e-3, "{j}");
+    }
+}
