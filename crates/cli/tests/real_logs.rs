@@ -217,7 +217,9 @@ fn full_mit_csail_log_lidar_only() {
     assert_eq!(ev["matched"], 1172);
     assert_eq!(odo["failed_matches"], 0);
     assert!(f(&ev, "near_trans_mean_m") < 0.04, "{ev}");
-    assert!(f(&ev, "trans_mean_m") < 0.4, "{ev}");
+    // The far relations measure accumulated drift, which swings by tens of cm with any change to
+    // the matcher (BENCHMARKS.md); only a gross regression should trip this.
+    assert!(f(&ev, "trans_mean_m") < 0.8, "{ev}");
 }
 
 #[test]

@@ -58,6 +58,18 @@ pub struct PassGate {
     pub dynamic_threshold_m2: Option<f32>,
 }
 
+/// Marks a current point that found no partner in the last pass.
+pub const NO_PARTNER: u16 = u16::MAX;
+
+/// Each current point's reference partner from the previous pass. Between passes the pose moves
+/// little, so the partner's neighbourhood is where to look again: later passes skip the bearing
+/// projection (an atan2 per point) and search the window around the old partner instead.
+pub struct Partners<'a> {
+    pub slots: &'a mut [u16],
+    /// Use the slots as search seeds (false on a first pass: they belong to another match).
+    pub reuse: bool,
+}
+
 pub fn associate<M: Metric, const N: usize>(
     reference: &PreparedScan<N>,
     current: &PreparedScan<N>,
@@ -65,6 +77,7 @@ pub fn associate<M: Metric, const N: usize>(
     gate: &PassGate,
     cfg: &MatchConfig,
     acc: &mut M,
+    mut partners: Option<Partners>,
 ) -> PassStats {
     let mut stats = PassStats::default();
     let mut hist = [0u16; HIST_BINS];
@@ -74,15 +87,24 @@ pub fn associate<M: Metric, const N: usize>(
     let inv_k2 = 1.0 / (gate.kernel_m * gate.kernel_m);
     let (s, c) = (libm::sinf(pose.theta), libm::cosf(pose.theta));
     let mut hint = 0;
-    for &p in current.points() {
+    for (i, &p) in current.points().iter().enumerate() {
         let rp = Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
         let q = rp + pose.translation();
-        let Some(k) = reference.project(q, hint) else {
-            continue;
+        let seed = partners
+            .as_ref()
+            .filter(|ps| ps.reuse)
+            .and_then(|ps| ps.slots.get(i).copied())
+            .filter(|&k| k != NO_PARTNER);
+        let k = match seed {
+            Some(k) => Some(k as usize),
+            None => reference.project(q, hint).inspect(|&k| hint = k),
         };
-        hint = k;
-        let Some((j, d2)) = reference.nearest_in_window(q, k, cfg.search_half_window as usize)
-        else {
+        let found =
+            k.and_then(|k| reference.nearest_in_window(q, k, cfg.search_half_window as usize));
+        if let Some(slot) = partners.as_mut().and_then(|ps| ps.slots.get_mut(i)) {
+            *slot = found.map_or(NO_PARTNER, |(j, _)| j as u16);
+        }
+        let Some((j, d2)) = found else {
             continue;
         };
         if d2 > point_gate2 {

@@ -1,7 +1,7 @@
 //! The iteration shared by `icl`, `plicp` and `icp`: associate, solve, keep degenerate
 //! directions at the guess, test convergence and divergence, then report quality.
 
-use super::associate::{associate, PassGate, PassStats};
+use super::associate::{associate, Partners, PassGate, PassStats};
 use super::config::MatchConfig;
 use super::linalg::sym2_eigen;
 use super::metrics::Solve;
@@ -18,6 +18,7 @@ pub fn run<S: Solve, const N: usize>(
     guess: Pose2,
     previous_translation: Vec2,
     cfg: &MatchConfig,
+    partners: &mut [u16],
 ) -> Result<MatchResult, MatchError> {
     let needed = cfg.min_points.max(3);
     let mut pose = guess;
@@ -44,7 +45,18 @@ pub fn run<S: Solve, const N: usize>(
             dynamic_threshold_m2: dynamic.filter(|_| first),
         };
         let mut acc = S::default();
-        let mut stats = associate(reference, current, pose, &gate, cfg, &mut acc);
+        let mut stats = associate(
+            reference,
+            current,
+            pose,
+            &gate,
+            cfg,
+            &mut acc,
+            Some(Partners {
+                slots: &mut *partners,
+                reuse: !first,
+            }),
+        );
         if first && stats.rejected_dynamic as usize * 2 > current.len() {
             // Seed 000 sec. 4.2 assumes a good guess; when it rejects most of the scan the guess
             // is off, not the world. Redo the pass without it.
@@ -60,6 +72,10 @@ pub fn run<S: Solve, const N: usize>(
                 },
                 cfg,
                 &mut acc,
+                Some(Partners {
+                    slots: &mut *partners,
+                    reuse: !first,
+                }),
             );
         }
         if first {

@@ -38,6 +38,8 @@ pub struct ScanMatcher<const N: usize> {
     has_reference: bool,
     /// Translation of the previous match, for the seed 000 sec. 4.2 test.
     previous_translation: Vec2,
+    /// Each current point's partner in the last association pass (see `associate::Partners`).
+    partners: [u16; N],
 }
 
 impl<const N: usize> ScanMatcher<N> {
@@ -48,6 +50,7 @@ impl<const N: usize> ScanMatcher<N> {
             reference: 0,
             has_reference: false,
             previous_translation: Vec2::ZERO,
+            partners: [associate::NO_PARTNER; N],
         }
     }
 
@@ -110,16 +113,17 @@ impl<const N: usize> ScanMatcher<N> {
             });
         }
         let prev = self.previous_translation;
-        let attempt = |guess: Pose2| match cfg.kind {
-            MatcherKind::Icl => {
-                driver::run::<PointToLineGaussNewton, N>(reference, current, guess, prev, cfg)
-            }
-            MatcherKind::Plicp => {
-                driver::run::<PointToSegmentExact, N>(reference, current, guess, prev, cfg)
-            }
-            MatcherKind::Icp => {
-                driver::run::<PointToPointClosedForm, N>(reference, current, guess, prev, cfg)
-            }
+        let partners = &mut self.partners;
+        let mut attempt = |guess: Pose2| match cfg.kind {
+            MatcherKind::Icl => driver::run::<PointToLineGaussNewton, N>(
+                reference, current, guess, prev, cfg, partners,
+            ),
+            MatcherKind::Plicp => driver::run::<PointToSegmentExact, N>(
+                reference, current, guess, prev, cfg, partners,
+            ),
+            MatcherKind::Icp => driver::run::<PointToPointClosedForm, N>(
+                reference, current, guess, prev, cfg, partners,
+            ),
             MatcherKind::IclPaper => {
                 let motion = icl_paper::run(
                     reference,
@@ -185,7 +189,7 @@ impl<const N: usize> ScanMatcher<N> {
             dynamic_threshold_m2: None,
         };
         let mut acc = PointToLineGaussNewton::default();
-        let stats = associate::associate(reference, current, motion, &gate, cfg, &mut acc);
+        let stats = associate::associate(reference, current, motion, &gate, cfg, &mut acc, None);
         Ok(driver::report(
             motion,
             &stats,
