@@ -9,6 +9,11 @@ use super::prepared::PreparedScan;
 use super::result::{MatchError, MatchQuality, MatchResult, MatchStatus, UNOBSERVED_VARIANCE};
 use crate::geom::{Pose2, Vec2};
 
+/// A pass that moved the pose less than this leaves every point within a beam or so of its
+/// partner, so the next pass may search around the partners (`associate::Partners`).
+const SETTLED_STEP_M: f32 = 0.01;
+const SETTLED_STEP_RAD: f32 = 0.004;
+
 /// Smallest robust residual deviation assumed, m: below the range noise of any lidar.
 const MIN_SIGMA_M: f32 = 0.005;
 
@@ -32,6 +37,9 @@ pub fn run<S: Solve, const N: usize>(
     let mut iterations = 0;
     let mut last = PassStats::default();
     let mut degenerate = None;
+    // Partners from the last pass are good search seeds only once the pose has nearly settled:
+    // an early pass can turn the scan by more beams than the search window covers.
+    let mut settled = false;
     while iterations < cfg.max_iterations.max(1) {
         let first = iterations == 0;
         let gate_m = if first {
@@ -54,7 +62,7 @@ pub fn run<S: Solve, const N: usize>(
             &mut acc,
             Some(Partners {
                 slots: &mut *partners,
-                reuse: !first,
+                reuse: !first && settled,
             }),
         );
         if first && stats.rejected_dynamic as usize * 2 > current.len() {
@@ -74,7 +82,7 @@ pub fn run<S: Solve, const N: usize>(
                 &mut acc,
                 Some(Partners {
                     slots: &mut *partners,
-                    reuse: !first,
+                    reuse: !first && settled,
                 }),
             );
         }
@@ -102,6 +110,7 @@ pub fn run<S: Solve, const N: usize>(
             return Err(MatchError::Diverged);
         }
         let (step_t, step_r) = pose.distance_to(next);
+        settled = step_t < SETTLED_STEP_M && step_r < SETTLED_STEP_RAD;
         pose = next;
         last = stats;
         if step_t < cfg.convergence_m && step_r < cfg.convergence_rad {
