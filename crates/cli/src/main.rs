@@ -8,6 +8,7 @@ mod log_args;
 mod odometry_cmd;
 mod plot;
 mod report;
+mod sim_closed_loop;
 mod sim_cmd;
 mod sim_plot;
 mod sim_world;

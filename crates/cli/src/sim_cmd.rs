@@ -3,6 +3,7 @@
 
 use crate::log_args::LogArgs;
 use crate::report::{print_summary, progress, CliError, CliResult};
+use crate::sim_closed_loop;
 use crate::sim_plot;
 use crate::sim_world;
 use clap::Args;
@@ -31,9 +32,15 @@ pub struct SimArgs {
     /// or an occupancy image (map.pgm with map.yaml beside it).
     #[arg(long, default_value = "office")]
     pub world: String,
-    /// What to fly: `survey` (the world's path) or `hold` (hover over the start).
-    #[arg(long, default_value = "survey", value_parser = ["survey", "hold"])]
+    /// What to fly: `survey` (the world's path, test pilot), or issue 4's closed-loop
+    /// scenarios flown by the onboard stack: `hold` (1 m over the start, 2 N push at 20 s),
+    /// `hold-people`, `land-on-low-battery`, `lidar-failure`.
+    #[arg(long, default_value = "survey", value_parser = [
+        "survey", "hold", "hold-people", "land-on-low-battery", "lidar-failure",
+    ])]
     pub scenario: String,
+    #[command(flatten)]
+    pub closed_loop: sim_closed_loop::ClosedLoopArgs,
     #[arg(long, default_value = "xv11", value_parser = ["xv11", "urg04lx", "utm30lx"])]
     pub lidar: String,
     /// Vehicle preset (f450, pelican) or a TOML file (`base = "..."` plus overrides).
@@ -329,18 +336,31 @@ pub fn run(args: SimArgs) -> CliResult {
             return Err(CliError(format!("--duration must be positive, got {d}")));
         }
     }
-    let limits = PlanLimits::default();
-    let plan = match args.scenario.as_str() {
-        "hold" => Plan::hold(&config.world, limits, args.duration.unwrap_or(30.0)),
-        _ => {
-            if config.world.path.is_empty() {
-                return Err(CliError(format!(
-                    "world {} has no survey path",
-                    config.world.name
-                )));
-            }
-            config.max_duration_s = args.duration.unwrap_or(config.max_duration_s);
-            Plan::survey(&config.world, limits)
+    let flight = sim_closed_loop::prepare(
+        &args.scenario,
+        &args.closed_loop,
+        args.duration,
+        &mut config,
+    )?;
+    let (pilot, flight_log, flight_s) = match flight {
+        Some(f) => (f.pilot, Some(f.log), config.max_duration_s),
+        None => {
+            let limits = PlanLimits::default();
+            let plan = match args.scenario.as_str() {
+                "hold" => Plan::hold(&config.world, limits, args.duration.unwrap_or(30.0)),
+                _ => {
+                    if config.world.path.is_empty() {
+                        return Err(CliError(format!(
+                            "world {} has no survey path",
+                            config.world.name
+                        )));
+                    }
+                    config.max_duration_s = args.duration.unwrap_or(config.max_duration_s);
+                    Plan::survey(&config.world, limits)
+                }
+            };
+            let flight_s = plan.duration_s().min(config.max_duration_s);
+            (Pilot::Test(plan), None, flight_s)
         }
     };
     for p in &config.world.path {
@@ -350,10 +370,7 @@ pub fn run(args: SimArgs) -> CliResult {
             .map_err(|e| CliError(format!("{}: {e}", args.world)))?;
     }
     let files = args.out.as_deref().map(open_files).transpose()?;
-    let bar = progress(
-        plan.duration_s().min(config.max_duration_s).ceil() as u64,
-        "sim",
-    );
+    let bar = progress(flight_s.ceil() as u64, "sim");
     let mut collector = Collector {
         files,
         states: Vec::new(),
@@ -361,14 +378,27 @@ pub fn run(args: SimArgs) -> CliResult {
         error: None,
     };
     let started = Instant::now();
-    let out = runner::run(&config, Pilot::Test(plan), &mut collector)
+    let out = runner::run(&config, pilot, &mut collector)
         .map_err(|e| CliError(format!("{}: {e}", args.world)))?;
     let wall_s = started.elapsed().as_secs_f64();
     collector.bar.finish_and_clear();
     if let Some(e) = collector.error.take() {
         return Err(CliError(format!("writing outputs: {e}")));
     }
-    let summary = summary(&args, &config, &out, wall_s);
+    let mut summary = summary(&args, &config, &out, wall_s);
+    if let Some(log) = &flight_log {
+        let log = log.borrow();
+        sim_closed_loop::extend_summary(
+            &mut summary,
+            &args.closed_loop,
+            &config,
+            &log,
+            &collector.states,
+        );
+        if let Some(dir) = args.out.as_deref() {
+            sim_closed_loop::plots(dir, &config, &log, &collector.states)?;
+        }
+    }
     if let (Some(dir), Some(files)) = (args.out.as_deref(), collector.files.take()) {
         let poses = files.poses.clone();
         finish_files(dir, files)?;
