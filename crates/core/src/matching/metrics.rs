@@ -24,6 +24,9 @@ pub struct PointToLineGaussNewton {
 }
 
 impl Metric for PointToLineGaussNewton {
+    /// Point-to-line where the reference point lies on a fitted line; point-to-point where it
+    /// does not (corners, door frames, clutter). Those are the points that pin down motion
+    /// along a corridor, so dropping them would leave that direction to the guess.
     fn pair<const N: usize>(
         r: &PreparedScan<N>,
         j: usize,
@@ -31,15 +34,31 @@ impl Metric for PointToLineGaussNewton {
         _cfg: &MatchConfig,
     ) -> Option<(Vec2, Vec2)> {
         let line = r.line(j);
-        line.is_valid().then(|| (r.point(j), line.normal))
+        Some((
+            r.point(j),
+            if line.is_valid() {
+                line.normal
+            } else {
+                Vec2::ZERO
+            },
+        ))
     }
 
     fn add(&mut self, _p: Vec2, q: Vec2, target: Vec2, n: Vec2, w: f32, pose: Pose2) {
-        let res = n.dot(q - target);
-        let jt = n.dot((q - pose.translation()).perp());
-        self.gradient[0] += w * n.x * res;
-        self.gradient[1] += w * n.y * res;
-        self.gradient[2] += w * jt * res;
+        let e = q - target;
+        let drp = (q - pose.translation()).perp();
+        if n == Vec2::ZERO {
+            // Two rows: d(e)/d(x, y, theta) = [1, 0, drp.x], [0, 1, drp.y].
+            self.gradient[0] += w * e.x;
+            self.gradient[1] += w * e.y;
+            self.gradient[2] += w * drp.dot(e);
+        } else {
+            let res = n.dot(e);
+            let jt = n.dot(drp);
+            self.gradient[0] += w * n.x * res;
+            self.gradient[1] += w * n.y * res;
+            self.gradient[2] += w * jt * res;
+        }
     }
 }
 
