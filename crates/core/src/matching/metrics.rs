@@ -24,24 +24,21 @@ pub struct PointToLineGaussNewton {
 }
 
 impl Metric for PointToLineGaussNewton {
-    /// Point-to-line where the reference point lies on a fitted line; point-to-point where it
-    /// does not (corners, door frames, clutter). Those are the points that pin down motion
-    /// along a corridor, so dropping them would leave that direction to the guess.
+    /// Point-to-line where the reference point lies on a fitted line; point-to-point at corners
+    /// (door frames, clutter). Corners pin down motion along a corridor, so dropping them would
+    /// leave that direction to the guess; isolated points (sparse far walls) are skipped, since
+    /// point-to-point on them would only echo the beam spacing.
     fn pair<const N: usize>(
         r: &PreparedScan<N>,
         j: usize,
         _q: Vec2,
         _cfg: &MatchConfig,
     ) -> Option<(Vec2, Vec2)> {
-        let line = r.line(j);
-        Some((
-            r.point(j),
-            if line.is_valid() {
-                line.normal
-            } else {
-                Vec2::ZERO
-            },
-        ))
+        let fit = r.line(j);
+        match fit.normal() {
+            Some(n) => Some((r.point(j), n)),
+            None => fit.is_corner().then_some((r.point(j), Vec2::ZERO)),
+        }
     }
 
     fn add(&mut self, _p: Vec2, q: Vec2, target: Vec2, n: Vec2, w: f32, pose: Pose2) {

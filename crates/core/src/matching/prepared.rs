@@ -11,16 +11,41 @@ use crate::geom::Vec2;
 use crate::scan::Scan;
 use core::f32::consts::TAU;
 
-/// A point's local line, fitted to its angular neighbours.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// A point's local shape, fitted to its angular neighbours: a line (with its unit normal), a
+/// corner, or nothing. Stored in 4 bytes (the normal as fixed-point i16 pairs, ample for a
+/// direction) because a reference holds one per beam and the whole matcher must fit in 16 KB.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LineFit {
-    /// Unit normal of the local line; zero when the point has too few close neighbours.
-    pub normal: Vec2,
+    nx: i16,
+    ny: i16,
 }
 
 impl LineFit {
-    pub fn is_valid(&self) -> bool {
-        self.normal.norm_squared() > 0.5
+    const SCALE: f32 = i16::MAX as f32;
+    /// Not a representable unit normal, so it can mark a corner.
+    const CORNER: LineFit = LineFit {
+        nx: i16::MIN,
+        ny: i16::MIN,
+    };
+
+    fn line(normal: Vec2) -> Self {
+        let q = |v: f32| libm::roundf(v.clamp(-1.0, 1.0) * Self::SCALE) as i16;
+        LineFit {
+            nx: q(normal.x),
+            ny: q(normal.y),
+        }
+    }
+
+    /// The unit normal, when the neighbourhood is a line.
+    pub fn normal(&self) -> Option<Vec2> {
+        (*self != Self::CORNER && *self != Self::default())
+            .then(|| Vec2::new(self.nx as f32 / Self::SCALE, self.ny as f32 / Self::SCALE))
+    }
+
+    /// Enough close neighbours, but not on one line: a corner, a door frame, clutter. Such a
+    /// point is a real feature; a point with too few neighbours (a sparse, far wall) is not.
+    pub fn is_corner(&self) -> bool {
+        *self == Self::CORNER
     }
 }
 
@@ -135,9 +160,11 @@ impl<const N: usize> PreparedScan<N> {
             let (mx, my) = (sx / n, sy / n);
             let (cxx, cxy, cyy) = (sxx / n - mx * mx, sxy / n - mx * my, syy / n - my * my);
             let (hi, lo, normal) = sym2_eigen(cxx, cxy, cyy);
-            if hi > 0.0 && lo <= max_flatness * hi {
-                self.lines[i] = LineFit { normal };
-            }
+            self.lines[i] = if hi > 0.0 && lo <= max_flatness * hi {
+                LineFit::line(normal)
+            } else {
+                LineFit::CORNER
+            };
         }
         self.has_lines = true;
     }
@@ -280,7 +307,10 @@ mod tests {
         p.load(&wall_scan()).unwrap();
         p.fit_lines(0.5, 0.05, 0.1);
         for i in 0..p.len() {
-            let n = p.line(i).normal;
+            let n = p
+                .line(i)
+                .normal()
+                .unwrap_or_else(|| panic!("point {i} has no line"));
             assert!(n.x.abs() > 0.999, "point {i}: {n:?}");
         }
     }
