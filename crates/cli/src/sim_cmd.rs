@@ -46,7 +46,8 @@ pub struct SimArgs {
     /// Vehicle preset (f450, pelican) or a TOML file (`base = "..."` plus overrides).
     #[arg(long, default_value = "f450")]
     pub vehicle: String,
-    /// Hold length for `hold`; an upper bound on the flight for `survey`, s.
+    /// Run length of the closed-loop scenarios (default 60) and of the test pilot's `hold`;
+    /// an upper bound on the flight for `survey`, s.
     #[arg(long)]
     pub duration: Option<f64>,
     #[arg(long, default_value_t = 1)]
