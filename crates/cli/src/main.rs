@@ -14,7 +14,11 @@ mod sim_plot;
 mod sim_world;
 
 #[derive(Parser)]
-#[command(name = "plumbline", version, about = "Indoor lidar navigation and flight control for quadcopters")]
+#[command(
+    name = "plumbline",
+    version,
+    about = "Indoor lidar navigation and flight control for quadcopters"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
