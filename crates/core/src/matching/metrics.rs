@@ -24,38 +24,25 @@ pub struct PointToLineGaussNewton {
 }
 
 impl Metric for PointToLineGaussNewton {
-    /// Point-to-line where the reference point lies on a fitted line; point-to-point at corners
-    /// (door frames, clutter). Corners pin down motion along a corridor, so dropping them would
-    /// leave that direction to the guess; isolated points (sparse far walls) are skipped, since
-    /// point-to-point on them would only echo the beam spacing.
+    /// Only points whose reference partner lies on a fitted line take part. A point-to-point
+    /// fallback at corners was tried (it lowered near-relation error on Intel from 2.3 to 1.5 cm)
+    /// but on dense noisy scans (UTM-30LX, 1440 beams) it produced wrong matches that flew the
+    /// closed loop 3 m off, so it is not used.
     fn pair<const N: usize>(
         r: &PreparedScan<N>,
         j: usize,
         _q: Vec2,
         _cfg: &MatchConfig,
     ) -> Option<(Vec2, Vec2)> {
-        let fit = r.line(j);
-        match fit.normal() {
-            Some(n) => Some((r.point(j), n)),
-            None => fit.is_corner().then_some((r.point(j), Vec2::ZERO)),
-        }
+        r.line(j).normal().map(|n| (r.point(j), n))
     }
 
     fn add(&mut self, _p: Vec2, q: Vec2, target: Vec2, n: Vec2, w: f32, pose: Pose2) {
-        let e = q - target;
-        let drp = (q - pose.translation()).perp();
-        if n == Vec2::ZERO {
-            // Two rows: d(e)/d(x, y, theta) = [1, 0, drp.x], [0, 1, drp.y].
-            self.gradient[0] += w * e.x;
-            self.gradient[1] += w * e.y;
-            self.gradient[2] += w * drp.dot(e);
-        } else {
-            let res = n.dot(e);
-            let jt = n.dot(drp);
-            self.gradient[0] += w * n.x * res;
-            self.gradient[1] += w * n.y * res;
-            self.gradient[2] += w * jt * res;
-        }
+        let res = n.dot(q - target);
+        let jt = n.dot((q - pose.translation()).perp());
+        self.gradient[0] += w * n.x * res;
+        self.gradient[1] += w * n.y * res;
+        self.gradient[2] += w * jt * res;
     }
 }
 

@@ -11,8 +11,8 @@ use crate::geom::Vec2;
 use crate::scan::Scan;
 use core::f32::consts::TAU;
 
-/// A point's local shape, fitted to its angular neighbours: a line (with its unit normal), a
-/// corner, or nothing. Stored in 4 bytes (the normal as fixed-point i16 pairs, ample for a
+/// A point's local line, fitted to its angular neighbours, or none (a corner, clutter, a sparse
+/// far wall). Stored in 4 bytes (the unit normal as fixed-point i16 pairs, ample for a
 /// direction) because a reference holds one per beam and the whole matcher must fit in 16 KB.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LineFit {
@@ -22,12 +22,6 @@ pub struct LineFit {
 
 impl LineFit {
     const SCALE: f32 = i16::MAX as f32;
-    /// Not a representable unit normal, so it can mark a corner.
-    const CORNER: LineFit = LineFit {
-        nx: i16::MIN,
-        ny: i16::MIN,
-    };
-
     fn line(normal: Vec2) -> Self {
         let q = |v: f32| libm::roundf(v.clamp(-1.0, 1.0) * Self::SCALE) as i16;
         LineFit {
@@ -38,14 +32,8 @@ impl LineFit {
 
     /// The unit normal, when the neighbourhood is a line.
     pub fn normal(&self) -> Option<Vec2> {
-        (*self != Self::CORNER && *self != Self::default())
+        (*self != Self::default())
             .then(|| Vec2::new(self.nx as f32 / Self::SCALE, self.ny as f32 / Self::SCALE))
-    }
-
-    /// Enough close neighbours, but not on one line: a corner, a door frame, clutter. Such a
-    /// point is a real feature; a point with too few neighbours (a sparse, far wall) is not.
-    pub fn is_corner(&self) -> bool {
-        *self == Self::CORNER
     }
 }
 
@@ -160,11 +148,9 @@ impl<const N: usize> PreparedScan<N> {
             let (mx, my) = (sx / n, sy / n);
             let (cxx, cxy, cyy) = (sxx / n - mx * mx, sxy / n - mx * my, syy / n - my * my);
             let (hi, lo, normal) = sym2_eigen(cxx, cxy, cyy);
-            self.lines[i] = if hi > 0.0 && lo <= max_flatness * hi {
-                LineFit::line(normal)
-            } else {
-                LineFit::CORNER
-            };
+            if hi > 0.0 && lo <= max_flatness * hi {
+                self.lines[i] = LineFit::line(normal);
+            }
         }
         self.has_lines = true;
     }
