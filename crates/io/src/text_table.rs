@@ -1,8 +1,8 @@
 //! Whitespace-separated numeric tables (relations, trajectories): one parser with line-numbered
 //! errors so both file types fail the same clear way.
 
-use crate::carmen::ReadError;
-use std::io::{BufRead, BufReader, Read};
+use crate::carmen::{open_text, ReadError};
+use std::io::BufRead;
 use std::path::Path;
 
 /// One parsed row: the raw first field (timestamps are kept as written) and all fields as numbers.
@@ -18,18 +18,8 @@ pub fn read_rows(
     columns: usize,
     mut visit: impl FnMut(Row) -> Result<(), ReadError>,
 ) -> Result<(), ReadError> {
-    let name = path.display().to_string();
-    let file = std::fs::File::open(path).map_err(|e| ReadError {
-        file: name.clone(),
-        line: 0,
-        message: e.to_string(),
-    })?;
-    let reader: Box<dyn Read> = if name.ends_with(".gz") {
-        Box::new(flate2::read::MultiGzDecoder::new(file))
-    } else {
-        Box::new(file)
-    };
-    for (i, line) in BufReader::new(reader).lines().enumerate() {
+    let (name, reader) = open_text(path)?;
+    for (i, line) in reader.lines().enumerate() {
         let err = |message: String| ReadError {
             file: name.clone(),
             line: i + 1,

@@ -9,7 +9,7 @@ mod write;
 
 pub use fov::FovRule;
 pub use read::{
-    parse_log, read_log, CarmenLog, OdomRecord, ReadError, ReadOptions, ReadStats,
+    open_text, parse_log, read_log, CarmenLog, OdomRecord, ReadError, ReadOptions, ReadStats,
     FLASER_MAX_RANGE_M,
 };
 pub use record::{LaserRecord, OdomPose};

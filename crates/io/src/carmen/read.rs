@@ -90,8 +90,9 @@ impl fmt::Display for ReadError {
 
 impl std::error::Error for ReadError {}
 
-/// Reads a log file, decompressing it when its name ends in `.gz`.
-pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<CarmenLog, ReadError> {
+/// Opens a text file for reading, decompressing it when its name ends in `.gz`; every reader of
+/// the project's files goes through here so they all take gzip the same way.
+pub fn open_text(path: &Path) -> Result<(String, BufReader<Box<dyn Read>>), ReadError> {
     let name = path.display().to_string();
     let file = std::fs::File::open(path).map_err(|e| ReadError {
         file: name.clone(),
@@ -103,7 +104,13 @@ pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<CarmenLog, ReadError>
     } else {
         Box::new(file)
     };
-    parse_log(BufReader::new(reader), &name, opts)
+    Ok((name, BufReader::new(reader)))
+}
+
+/// Reads a log file, decompressing it when its name ends in `.gz`.
+pub fn read_log(path: &Path, opts: &ReadOptions) -> Result<CarmenLog, ReadError> {
+    let (name, reader) = open_text(path)?;
+    parse_log(reader, &name, opts)
 }
 
 /// Parses a log from any reader; `name` is used in error messages.
