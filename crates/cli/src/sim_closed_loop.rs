@@ -5,8 +5,8 @@
 //! `sim_cmd` owns the command, the recorded files and the shared plots; this module sets up a
 //! scenario, adds the closed-loop keys to the summary and draws the closed-loop plots.
 
-use crate::plot::fonts_available;
 use crate::report::CliError;
+use crate::sim_plot::{stacked_panels, Line};
 use clap::Args;
 use plotters::prelude::*;
 use plumbline_core::control::cascade::CascadeConfig;
@@ -20,7 +20,6 @@ use plumbline_sim::onboard_link::{
 use plumbline_sim::runner::{Pilot, SimConfig, StateSample};
 use serde_json::{json, Value};
 use std::cell::RefCell;
-use std::error::Error;
 use std::path::Path;
 use std::rc::Rc;
 
@@ -266,62 +265,6 @@ pub fn extend_summary(
     }
 }
 
-type Line = (&'static str, RGBColor, Vec<(f64, f64)>);
-
-/// Stacked panels sharing the time axis, one per (title, lines).
-fn panels(path: &Path, panels: Vec<(&str, Vec<Line>)>) -> Result<(), Box<dyn Error>> {
-    let height = 300 * panels.len().max(1) as u32;
-    let root = BitMapBackend::new(path, (1200, height)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let areas = root.split_evenly((panels.len().max(1), 1));
-    let t_end = panels
-        .iter()
-        .flat_map(|p| p.1.iter().filter_map(|l| l.2.last().map(|q| q.0)))
-        .fold(1e-3, f64::max);
-    let labels = fonts_available();
-    for (area, (title, lines)) in areas.iter().zip(panels) {
-        let (lo, hi) = lines
-            .iter()
-            .flat_map(|l| l.2.iter().map(|p| p.1))
-            .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
-        let (lo, hi) = if lo > hi {
-            (0.0, 1.0)
-        } else {
-            let pad = 0.05 * (hi - lo + 1e-3);
-            (lo - pad, hi + pad)
-        };
-        let mut builder = ChartBuilder::on(area);
-        builder.margin(8);
-        if labels {
-            builder
-                .caption(title, ("sans-serif", 16))
-                .x_label_area_size(40)
-                .y_label_area_size(60);
-        }
-        let mut chart = builder.build_cartesian_2d(0.0..t_end, lo..hi)?;
-        if labels {
-            chart.configure_mesh().x_desc("t (s)").draw()?;
-        }
-        for (name, color, pts) in lines {
-            let drawn = chart.draw_series(LineSeries::new(pts, color.stroke_width(1)))?;
-            if labels {
-                drawn
-                    .label(name)
-                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 15, y)], color));
-            }
-        }
-        if labels {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()?;
-        }
-    }
-    root.present()?;
-    Ok(())
-}
-
 /// `position_error.png` (seed 000 Fig. 9: Δx, Δy from the hold point, driven back to zero
 /// after the push) and `motors.png` (the four motor commands). Altitude, roll, pitch, battery
 /// and the top view are `sim_cmd`'s `flight.png` and `top.png`.
@@ -353,7 +296,7 @@ pub fn plots(
             ),
         ],
     )];
-    panels(&dir.join("position_error.png"), error)
+    stacked_panels(&dir.join("position_error.png"), error)
         .map_err(|e| CliError(format!("position_error.png: {e}")))?;
     let colors = [RED, GREEN, BLUE, BLACK];
     let names = ["motor 1", "motor 2", "motor 3", "motor 4"];
@@ -367,7 +310,7 @@ pub fn plots(
             (names[i], colors[i], pts)
         })
         .collect();
-    panels(
+    stacked_panels(
         &dir.join("motors.png"),
         vec![("motor commands (0..1)", motors)],
     )

@@ -92,13 +92,7 @@ fn unwrapped_yaw_deg(states: &[StateSample]) -> Vec<(f64, f64)> {
 
 /// Three stacked panels: altitude (m), roll/pitch/yaw (deg), battery voltage (V).
 pub fn time_series(path: &Path, states: &[StateSample]) -> Result<(), Box<dyn Error>> {
-    let root = BitMapBackend::new(path, (1200, 900)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let panels = root.split_evenly((3, 1));
-    let t_end = states.last().map_or(1.0, |s| s.t_s).max(1e-3);
-    let labels = fonts_available();
-    type Series<'a> = Vec<(&'a str, RGBColor, Vec<(f64, f64)>)>;
-    let series: [(&str, Series); 3] = [
+    let series = vec![
         (
             "altitude (m)",
             vec![(
@@ -138,7 +132,24 @@ pub fn time_series(path: &Path, states: &[StateSample]) -> Result<(), Box<dyn Er
             )],
         ),
     ];
-    for (area, (title, lines)) in panels.iter().zip(series) {
+    stacked_panels(path, series)
+}
+
+/// One curve of a panel: legend name, colour, (t, value) points.
+pub type Line = (&'static str, RGBColor, Vec<(f64, f64)>);
+
+/// Stacked panels sharing the time axis, one per (title, lines).
+pub fn stacked_panels(path: &Path, panels: Vec<(&str, Vec<Line>)>) -> Result<(), Box<dyn Error>> {
+    let height = 300 * panels.len().max(1) as u32;
+    let root = BitMapBackend::new(path, (1200, height)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let areas = root.split_evenly((panels.len().max(1), 1));
+    let t_end = panels
+        .iter()
+        .flat_map(|p| p.1.iter().filter_map(|l| l.2.last().map(|q| q.0)))
+        .fold(1e-3, f64::max);
+    let labels = fonts_available();
+    for (area, (title, lines)) in areas.iter().zip(panels) {
         let (lo, hi) = lines
             .iter()
             .flat_map(|l| l.2.iter().map(|p| p.1))
@@ -146,15 +157,16 @@ pub fn time_series(path: &Path, states: &[StateSample]) -> Result<(), Box<dyn Er
         let (lo, hi) = if lo > hi {
             (0.0, 1.0)
         } else {
-            (lo - 0.05 * (hi - lo + 1e-3), hi + 0.05 * (hi - lo + 1e-3))
+            let pad = 0.05 * (hi - lo + 1e-3);
+            (lo - pad, hi + pad)
         };
         let mut builder = ChartBuilder::on(area);
         builder.margin(8);
         if labels {
             builder
                 .caption(title, ("sans-serif", 16))
-                .x_label_area_size(25)
-                .y_label_area_size(50);
+                .x_label_area_size(40)
+                .y_label_area_size(60);
         }
         let mut chart = builder.build_cartesian_2d(0.0..t_end, lo..hi)?;
         if labels {
