@@ -10,6 +10,7 @@ mod driver;
 mod fast_math;
 mod icl_paper;
 mod linalg;
+pub mod local_map;
 mod metrics;
 mod odometry;
 mod prepared;
@@ -56,6 +57,15 @@ impl<const N: usize> ScanMatcher<N> {
 
     pub fn config(&self) -> &MatchConfig {
         &self.config
+    }
+
+    /// The reference scan's valid points, in its own frame (empty before the first reference).
+    pub fn reference_points(&self) -> &[Vec2] {
+        if self.has_reference {
+            self.slots[self.reference].points()
+        } else {
+            &[]
+        }
     }
 
     pub fn has_reference(&self) -> bool {

@@ -6,7 +6,7 @@
 //! caller's prior (wheel odometry, IMU) or, lidar-only, the last motion repeated.
 
 use super::{MatchConfig, MatchError, MatchResult, ScanMatcher};
-use crate::geom::Pose2;
+use crate::geom::{Pose2, Vec2};
 use crate::scan::Scan;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,6 +53,7 @@ pub struct LidarOdometry<const N: usize> {
     pose: Pose2,
     /// Motion over the last scan interval, the lidar-only prediction for the next one.
     last_motion: Pose2,
+    keyframes_taken: u32,
 }
 
 impl<const N: usize> LidarOdometry<N> {
@@ -63,7 +64,30 @@ impl<const N: usize> LidarOdometry<N> {
             keyframe_pose: Pose2::IDENTITY,
             pose: Pose2::IDENTITY,
             last_motion: Pose2::IDENTITY,
+            keyframes_taken: 0,
         }
+    }
+
+    /// Pose of the current keyframe in the frame of the first scan.
+    pub fn keyframe_pose(&self) -> Pose2 {
+        self.keyframe_pose
+    }
+
+    /// How many keyframes have been taken so far; it changes exactly when one is.
+    pub fn keyframes_taken(&self) -> u32 {
+        self.keyframes_taken
+    }
+
+    /// The current keyframe's points in its own frame.
+    pub fn keyframe_points(&self) -> &[Vec2] {
+        self.matcher.reference_points()
+    }
+
+    /// Moves the keyframe just taken (and so the current pose) to where another source, such as
+    /// a map, places it better. Call it only right after an update that took a keyframe.
+    pub fn reanchor_keyframe(&mut self, pose: Pose2) {
+        self.keyframe_pose = pose;
+        self.pose = pose;
     }
 
     /// Current pose estimate in the frame of the first scan.
@@ -78,6 +102,7 @@ impl<const N: usize> LidarOdometry<N> {
             return match self.matcher.set_reference(scan) {
                 Ok(()) => {
                     self.keyframe_pose = self.pose;
+                    self.keyframes_taken = self.keyframes_taken.wrapping_add(1);
                     OdometryStep::Started
                 }
                 Err(error) => OdometryStep::Predicted { error },
@@ -98,6 +123,7 @@ impl<const N: usize> LidarOdometry<N> {
                 if new_keyframe {
                     self.matcher.promote_current();
                     self.keyframe_pose = new_pose;
+                    self.keyframes_taken = self.keyframes_taken.wrapping_add(1);
                 }
                 OdometryStep::Matched {
                     result,
@@ -113,6 +139,7 @@ impl<const N: usize> LidarOdometry<N> {
                 ) && self.matcher.set_reference(scan).is_ok()
                 {
                     self.keyframe_pose = predicted;
+                    self.keyframes_taken = self.keyframes_taken.wrapping_add(1);
                 }
                 OdometryStep::Predicted { error }
             }

@@ -1,0 +1,10 @@
+//! A small local map that keyframes are aligned with, to cut the drift of scan-to-keyframe
+//! odometry (issue 2 allows "keyframes or a small local map … if they cut drift").
+
+mod cells;
+mod mapped;
+mod refine;
+
+pub use cells::{CellLine, LineMap, LineMapConfig, LineMapError, MapCell};
+pub use mapped::{MapUse, MappedOdometry, MappedStep};
+pub use refine::{refine, RefineConfig, RefineRefusal, Refined};
