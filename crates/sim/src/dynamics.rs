@@ -1,5 +1,5 @@
-//! Rigid-body quadrotor dynamics (seed 002 eqs. 13-19) with the seed's second-order motor model,
-//! integrated by fixed-step fourth-order Runge-Kutta.
+//! Rigid-body quadrotor dynamics (seed 002 eqs. 13-19) with the seed's second-order motor model:
+//! the body by fixed-step fourth-order Runge-Kutta, the motors in closed form ([`crate::motors`]).
 //!
 //! Differences from the seed's text, and why:
 //! - Frames are FLU body / ENU-like world (DESIGN.md §3), so thrust is +z body and rotor numbering
@@ -12,9 +12,13 @@
 //!   (eq. 18); written this way angular momentum is conserved exactly when no external moment acts.
 //! - The seed neglects aerodynamics near hover; we add linear (rotor) and quadratic (fuselage) drag
 //!   on the air-relative velocity and rotational damping, so gusts have something to push on.
+//! - The motor stages do not feed back from the body, so they are solved exactly over the step
+//!   and the body's RK4 stages read the rotors at t, t + dt/2 and t + dt: the rotor terms are
+//!   evaluated three times a step instead of four, and the body carries 13 states, not 21.
 
 use crate::math::{Quat, Vec3};
-use crate::vehicle::{Rotor, VehicleParams, GRAVITY};
+use crate::motors::{MotorModel, Rotors};
+use crate::vehicle::{VehicleParams, GRAVITY};
 
 /// The integrated state: body pose and rates, the two motor stages of each rotor.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -55,17 +59,48 @@ impl BodyState {
                 .all(|v| v.is_finite())
     }
 
+    fn rotors(&self) -> Rotors {
+        Rotors {
+            motor: self.motor,
+            speed: self.rotor_speed,
+        }
+    }
+}
+
+/// The rigid-body part of the state, which RK4 integrates.
+#[derive(Clone, Copy, Debug)]
+struct Rigid {
+    position: Vec3,
+    velocity: Vec3,
+    attitude: Quat,
+    rate: Vec3,
+}
+
+impl Rigid {
     /// `self + d * h` for an RK4 stage.
-    fn add_scaled(&self, d: &BodyState, h: f64) -> BodyState {
-        BodyState {
+    fn add_scaled(&self, d: &Rigid, h: f64) -> Rigid {
+        Rigid {
             position: self.position + d.position * h,
             velocity: self.velocity + d.velocity * h,
             attitude: self.attitude.add_scaled(d.attitude, h),
             rate: self.rate + d.rate * h,
-            motor: core::array::from_fn(|i| self.motor[i] + d.motor[i] * h),
-            rotor_speed: core::array::from_fn(|i| self.rotor_speed[i] + d.rotor_speed[i] * h),
         }
     }
+
+    /// `a + b` component-wise, for summing RK4 slopes.
+    fn sum(&self, o: &Rigid) -> Rigid {
+        self.add_scaled(o, 1.0)
+    }
+}
+
+/// What the rotors do to the body at one instant (body frame).
+#[derive(Clone, Copy, Debug)]
+struct RotorWrench {
+    thrust: f64,
+    /// Differential thrust (eq. 16), hub moments (eq. 15) and the inertial reaction -ḣ (eq. 17).
+    moment: Vec3,
+    /// h_z = Σ s_i I_r Ω_i, for the gyroscopic moment (eq. 18).
+    momentum: f64,
 }
 
 /// What acts on the vehicle during one step (held constant over the step).
@@ -79,19 +114,22 @@ pub struct Forcing {
     pub force: Vec3,
 }
 
-/// The dynamics of one vehicle, constants precomputed.
+/// The dynamics of one vehicle at one step length, constants precomputed: the rotor terms are
+/// per-rotor weights of Ω² and Ω, so each is a four-term dot product.
 #[derive(Clone, Debug)]
 pub struct Dynamics {
-    inertia: Vec3,
-    rotors: [Rotor; 4],
+    dt: f64,
+    motors: MotorModel,
     /// Per-rotor k_T, with the motor mismatch applied.
     thrust_coeff: [f64; 4],
-    moment_coeff: f64,
-    rotor_inertia: f64,
-    max_speed: f64,
-    /// 1/τ of the two motor stages and 1/I, 1/m: the derivative runs four times a step.
-    inv_motor_tau: f64,
-    inv_rotor_tau: f64,
+    /// Roll, pitch and yaw moment per Ω²: y_i k_T, -x_i k_T (r × (0, 0, τ)) and -s_i k_M.
+    roll_coeff: [f64; 4],
+    pitch_coeff: [f64; 4],
+    yaw_coeff: [f64; 4],
+    /// s_i I_r: rotor angular momentum per unit speed.
+    momentum_coeff: [f64; 4],
+    inertia: Vec3,
+    /// 1/I and 1/m: the derivative runs four times a step.
     inv_inertia: Vec3,
     inv_mass: f64,
     drag_linear: f64,
@@ -99,18 +137,24 @@ pub struct Dynamics {
     drag_rotational: f64,
 }
 
+fn dot4(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    (a[0] * b[0] + a[1] * b[1]) + (a[2] * b[2] + a[3] * b[3])
+}
+
 impl Dynamics {
-    /// `mismatch[i]` scales rotor i's thrust coefficient (1.0 = nominal).
-    pub fn new(p: &VehicleParams, mismatch: [f64; 4]) -> Self {
+    /// `mismatch[i]` scales rotor i's thrust coefficient (1.0 = nominal); `dt_s` is the step.
+    pub fn new(p: &VehicleParams, mismatch: [f64; 4], dt_s: f64) -> Self {
+        let rotors = p.rotors();
+        let thrust_coeff = mismatch.map(|m| p.thrust_coeff * m);
         Self {
+            dt: dt_s,
+            motors: MotorModel::new(p.motor_tau_s, p.rotor_tau_s, p.max_rotor_speed_radps, dt_s),
+            thrust_coeff,
+            roll_coeff: core::array::from_fn(|i| rotors[i].position_m.y * thrust_coeff[i]),
+            pitch_coeff: core::array::from_fn(|i| -rotors[i].position_m.x * thrust_coeff[i]),
+            yaw_coeff: rotors.map(|r| -r.spin * p.moment_coeff),
+            momentum_coeff: rotors.map(|r| r.spin * p.rotor_inertia_kgm2),
             inertia: p.inertia(),
-            rotors: p.rotors(),
-            thrust_coeff: mismatch.map(|m| p.thrust_coeff * m),
-            moment_coeff: p.moment_coeff,
-            rotor_inertia: p.rotor_inertia_kgm2,
-            max_speed: p.max_rotor_speed_radps,
-            inv_motor_tau: 1.0 / p.motor_tau_s,
-            inv_rotor_tau: 1.0 / p.rotor_tau_s,
             inv_inertia: Vec3::new(
                 1.0 / p.inertia_kgm2[0],
                 1.0 / p.inertia_kgm2[1],
@@ -128,92 +172,75 @@ impl Dynamics {
         core::array::from_fn(|i| self.thrust_coeff[i] * s.rotor_speed[i] * s.rotor_speed[i])
     }
 
-    /// Shaft torque of each rotor (the hub yawing moment magnitude M_i = k_M Ω_i²), N m.
-    pub fn shaft_torques(&self, s: &BodyState) -> [f64; 4] {
-        core::array::from_fn(|i| self.moment_coeff * s.rotor_speed[i] * s.rotor_speed[i])
-    }
-
     /// dΩ_i/dt of the second motor stage, rad/s².
-    pub fn rotor_acceleration(&self, s: &BodyState, i: usize) -> f64 {
-        (self.max_speed * s.motor[i] - s.rotor_speed[i]) * self.inv_rotor_tau
+    pub fn rotor_acceleration(&self, s: &BodyState) -> [f64; 4] {
+        self.motors.acceleration(&s.rotors())
     }
 
-    /// Rotor inertia I_r, for the acceleration power of the rotors.
-    pub fn rotor_inertia(&self) -> f64 {
-        self.rotor_inertia
+    /// Seed 002 eqs. 15-17 for the rotors in state `r`.
+    fn wrench(&self, r: &Rotors) -> RotorWrench {
+        let w2 = r.speed.map(|w| w * w);
+        let accel = self.motors.acceleration(r);
+        RotorWrench {
+            thrust: dot4(&self.thrust_coeff, &w2),
+            moment: Vec3::new(
+                dot4(&self.roll_coeff, &w2),
+                dot4(&self.pitch_coeff, &w2),
+                dot4(&self.yaw_coeff, &w2) - dot4(&self.momentum_coeff, &accel),
+            ),
+            momentum: dot4(&self.momentum_coeff, &r.speed),
+        }
     }
 
-    /// Force on the vehicle other than gravity, world frame, N.
-    fn non_gravity_force(&self, s: &BodyState, f: &Forcing, thrust: f64) -> Vec3 {
+    /// The time derivative of the rigid body (eqs. 13, 14, 18 and the quaternion kinematics).
+    fn slope(&self, s: &Rigid, f: &Forcing, r: &RotorWrench) -> Rigid {
+        let w = s.rate;
+        // Eq. 14: -ω × I ω, and -ω × h with h = (0, 0, h_z), plus rotational damping.
+        let net = r.moment - w.cross(w.scale(self.inertia))
+            + Vec3::new(-w.y * r.momentum, w.x * r.momentum, 0.0)
+            - w * self.drag_rotational;
         let air = s.velocity - f.wind;
         let drag = air * -(self.drag_linear + self.drag_quadratic * air.norm());
-        s.attitude.z_axis() * thrust + drag + f.force
-    }
-
-    /// The time derivative of the state (seed 002 eqs. 13-19 and the motor model), for
-    /// commands already in 0..1.
-    pub fn derivative(&self, s: &BodyState, f: &Forcing) -> BodyState {
-        let mut d = BodyState::default();
-        let mut thrust = 0.0;
-        let mut moment = Vec3::ZERO;
-        let mut rotor_momentum = 0.0; // h_z = Σ s_i I_r Ω_i
-        let mut rotor_momentum_rate = 0.0;
-        for (i, rotor) in self.rotors.iter().enumerate() {
-            d.motor[i] = (f.command[i] - s.motor[i]) * self.inv_motor_tau;
-            d.rotor_speed[i] = self.rotor_acceleration(s, i);
-            let w2 = s.rotor_speed[i] * s.rotor_speed[i];
-            let tau = self.thrust_coeff[i] * w2;
-            thrust += tau;
-            // Differential thrust (eq. 16) and hub yawing moment (eq. 15): the air drags the
-            // rotor against its spin, the body feels the reaction.
-            // r × (0, 0, τ) = (y τ, -x τ, 0).
-            moment.x += rotor.position_m.y * tau;
-            moment.y -= rotor.position_m.x * tau;
-            moment.z -= rotor.spin * self.moment_coeff * w2;
-            rotor_momentum += rotor.spin * self.rotor_inertia * s.rotor_speed[i];
-            rotor_momentum_rate += rotor.spin * self.rotor_inertia * d.rotor_speed[i];
+        let force = s.attitude.z_axis() * r.thrust + drag + f.force;
+        Rigid {
+            position: s.velocity,
+            velocity: force * self.inv_mass - Vec3::Z * GRAVITY,
+            attitude: s.attitude.derivative(w),
+            rate: net.scale(self.inv_inertia),
         }
-        let w = s.rate;
-        let iw = w.scale(self.inertia);
-        let h = Vec3::Z * rotor_momentum;
-        // Eq. 14 with eqs. 17 (-ḣ) and 18 (-ω × h), plus rotational damping.
-        let net = moment
-            - w.cross(iw)
-            - w.cross(h)
-            - Vec3::Z * rotor_momentum_rate
-            - w * self.drag_rotational;
-        d.rate = net.scale(self.inv_inertia);
-        d.position = s.velocity;
-        d.velocity = self.non_gravity_force(s, f, thrust) * self.inv_mass - Vec3::Z * GRAVITY;
-        d.attitude = s.attitude.derivative(w);
-        d
     }
 
-    /// One classical RK4 step of `dt` seconds; the quaternion is renormalised afterwards.
-    /// Commands are clamped to 0..1 here, once, before the four stages.
-    pub fn step(&self, s: &BodyState, f: &Forcing, dt: f64) -> BodyState {
+    /// One step: the motors in closed form, the body by classical RK4 (the quaternion is
+    /// renormalised afterwards). Commands are clamped to 0..1 here, once.
+    pub fn step(&self, s: &BodyState, f: &Forcing) -> BodyState {
         let f = &Forcing {
             command: f.command.map(|c| c.clamp(0.0, 1.0)),
             ..*f
         };
-        let k1 = self.derivative(s, f);
-        let k2 = self.derivative(&s.add_scaled(&k1, 0.5 * dt), f);
-        let k3 = self.derivative(&s.add_scaled(&k2, 0.5 * dt), f);
-        let k4 = self.derivative(&s.add_scaled(&k3, dt), f);
-        let mut n = *s;
-        let h6 = dt / 6.0;
-        for (k, w) in [(&k1, 1.0), (&k2, 2.0), (&k3, 2.0), (&k4, 1.0)] {
-            n = n.add_scaled(k, w * h6);
+        let now = s.rotors();
+        let mid = self.motors.half_step(&now, &f.command);
+        let end = self.motors.full_step(&now, &f.command);
+        let (w_now, w_mid, w_end) = (self.wrench(&now), self.wrench(&mid), self.wrench(&end));
+        let b = Rigid {
+            position: s.position,
+            velocity: s.velocity,
+            attitude: s.attitude,
+            rate: s.rate,
+        };
+        let h = self.dt;
+        let k1 = self.slope(&b, f, &w_now);
+        let k2 = self.slope(&b.add_scaled(&k1, 0.5 * h), f, &w_mid);
+        let k3 = self.slope(&b.add_scaled(&k2, 0.5 * h), f, &w_mid);
+        let k4 = self.slope(&b.add_scaled(&k3, h), f, &w_end);
+        let n = b.add_scaled(&k1.sum(&k4).add_scaled(&k2.sum(&k3), 2.0), h / 6.0);
+        BodyState {
+            position: n.position,
+            velocity: n.velocity,
+            attitude: n.attitude.normalized(),
+            rate: n.rate,
+            motor: end.motor,
+            rotor_speed: end.speed,
         }
-        n.attitude = n.attitude.normalized();
-        n
-    }
-
-    /// Specific force an accelerometer at the centre of gravity reads, body frame, m/s².
-    pub fn specific_force(&self, s: &BodyState, f: &Forcing) -> Vec3 {
-        let thrust: f64 = self.thrusts(s).iter().sum();
-        s.attitude
-            .rotate_inv(self.non_gravity_force(s, f, thrust) * self.inv_mass)
     }
 }
 
@@ -223,7 +250,7 @@ mod tests {
     use crate::vehicle::Frame;
 
     fn bare(p: &VehicleParams) -> Dynamics {
-        Dynamics::new(p, [1.0; 4])
+        Dynamics::new(p, [1.0; 4], 1e-3)
     }
 
     /// A state whose motors sit in steady state at command `cmd`.
@@ -252,7 +279,7 @@ mod tests {
                 ..Forcing::default()
             };
             for _ in 0..5000 {
-                s = dynamics.step(&s, &f, 1e-3);
+                s = dynamics.step(&s, &f);
             }
             assert!(
                 (s.position - Vec3::new(0.0, 0.0, 1.0)).norm() < 1e-9,
@@ -281,7 +308,7 @@ mod tests {
         };
         let f = Forcing::default();
         for _ in 0..1000 {
-            s = dynamics.step(&s, &f, 1e-3);
+            s = dynamics.step(&s, &f);
         }
         let z = 10.0 + 2.0 - 0.5 * GRAVITY;
         assert!((s.position.z - z).abs() < 1e-9 && (s.position.x - 1.0).abs() < 1e-9);
@@ -318,7 +345,7 @@ mod tests {
         let l0 = momentum(&s);
         let e0 = s.rate.dot(s.rate.scale(p.inertia()));
         for _ in 0..10_000 {
-            s = dynamics.step(&s, &f, 1e-3);
+            s = dynamics.step(&s, &f);
         }
         assert!(
             (momentum(&s) - l0).norm() < 1e-8 * l0.norm(),
@@ -348,7 +375,7 @@ mod tests {
             ..Forcing::default()
         };
         for _ in 0..300 {
-            s = dynamics.step(&s, &f, 1e-3);
+            s = dynamics.step(&s, &f);
         }
         assert!(
             s.rate.z > 0.05 && s.attitude.yaw() > 0.0,
@@ -360,13 +387,14 @@ mod tests {
 
     #[test]
     fn differential_thrust_rolls_and_pitches_the_right_way() {
+        // One step from rest: the rate it builds up has the sign of the angular acceleration.
         let p = VehicleParams::pelican();
         let dynamics = bare(&p);
         let h = p.hover_rotor_speed() / p.max_rotor_speed_radps;
         // Left rotors (3, 4) faster: roll right-side-down is positive roll in FLU.
         let roll_cmd = [h * 0.98, h * 0.98, h * 1.02, h * 1.02];
         let s = spinning(&p, roll_cmd);
-        let d = dynamics.derivative(
+        let d = dynamics.step(
             &s,
             &Forcing {
                 command: roll_cmd,
@@ -377,7 +405,7 @@ mod tests {
         // Back rotors (2, 3) faster: nose down, which is positive pitch in FLU.
         let pitch_cmd = [h * 0.98, h * 1.02, h * 1.02, h * 0.98];
         let s = spinning(&p, pitch_cmd);
-        let d = dynamics.derivative(
+        let d = dynamics.step(
             &s,
             &Forcing {
                 command: pitch_cmd,
@@ -396,10 +424,9 @@ mod tests {
             command: [1.0, 1.0, 1.0, 1.0],
             ..Forcing::default()
         };
-        let dt = 1e-3;
         let t = 0.05;
         for _ in 0..50 {
-            s = dynamics.step(&s, &f, dt);
+            s = dynamics.step(&s, &f);
         }
         // Step response of 1/((τ1 s + 1)(τ2 s + 1)).
         let (a, b) = (p.motor_tau_s, p.rotor_tau_s);

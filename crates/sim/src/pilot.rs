@@ -11,6 +11,13 @@ use crate::math::{Quat, Vec3};
 use crate::plan::Reference;
 use crate::vehicle::{VehicleParams, GRAVITY};
 
+/// Position errors beyond this are not integrated, m.
+const INTEGRAL_GATE_M: f64 = 0.5;
+/// Velocity errors beyond this (still chasing the reference) are not integrated, m/s.
+const INTEGRAL_GATE_MPS: f64 = 0.1;
+/// The most acceleration the integral term may command, m/s².
+const MAX_INTEGRAL_ACCEL: f64 = 1.0;
+
 /// The test pilot's gains and the allocation it inverts.
 #[derive(Clone, Debug)]
 pub struct TestPilot {
@@ -79,7 +86,7 @@ impl TestPilot {
             allocation_inv: invert4(a)?,
             pos_gain: 2.5,
             vel_gain: 3.0,
-            int_gain: 0.3,
+            int_gain: 1.0,
             att_bandwidth: 10.0,
             att_damping: 0.9,
             yaw_bandwidth: 4.0,
@@ -95,12 +102,20 @@ impl TestPilot {
             return [0.0; 4];
         }
         let e_p = r.position - s.position;
-        // Conditional integration: only near the reference, so a large step does not wind up.
-        if e_p.norm() < 0.1 {
+        // Integrate only when settled near the reference (close, and not chasing it), and bound
+        // what the integral may ask for, so a large step does not wind up; the position gate is
+        // wide enough that the steady offset the unmodelled motor mismatch causes (tens of
+        // centimetres) is still integrated away.
+        let e_v = r.velocity - s.velocity;
+        if e_p.norm() < INTEGRAL_GATE_M && e_v.norm() < INTEGRAL_GATE_MPS {
             self.integral += e_p * dt_s;
+            let demand = self.integral.norm() * self.int_gain;
+            if demand > MAX_INTEGRAL_ACCEL {
+                self.integral = self.integral * (MAX_INTEGRAL_ACCEL / demand);
+            }
         }
         let mut acc = e_p * self.pos_gain
-            + (r.velocity - s.velocity) * self.vel_gain
+            + e_v * self.vel_gain
             + self.integral * self.int_gain
             + r.acceleration;
         let h = (acc.x * acc.x + acc.y * acc.y).sqrt();
@@ -198,7 +213,7 @@ mod tests {
                 frame,
                 ..VehicleParams::f450()
             };
-            let dynamics = Dynamics::new(&p, [1.0; 4]);
+            let dynamics = Dynamics::new(&p, [1.0; 4], 1e-3);
             let mut pilot = TestPilot::new(&p).unwrap();
             let h = p.hover_rotor_speed();
             let mut s = BodyState {
@@ -219,7 +234,6 @@ mod tests {
                         command: cmd,
                         ..Forcing::default()
                     },
-                    1e-3,
                 );
             }
             assert!(

@@ -1,4 +1,5 @@
-//! A small seeded generator (xoshiro256++, seeded through splitmix64) with Gaussian draws.
+//! A small seeded generator (xoshiro256++, seeded through splitmix64) with Gaussian draws
+//! (ziggurat, see [`crate::ziggurat`]).
 //!
 //! The simulator's promise is bit-for-bit reproducibility from one `u64` seed on every platform.
 //! Owning the 40 lines of generator means no upstream release can change a stream under us, and
@@ -9,8 +10,6 @@
 #[derive(Clone, Debug)]
 pub struct Rng {
     s: [u64; 4],
-    /// The second Box-Muller output, kept for the next Gaussian draw.
-    spare: Option<f64>,
 }
 
 fn splitmix64(state: &mut u64) -> u64 {
@@ -26,7 +25,6 @@ impl Rng {
         let mut sm = seed;
         Self {
             s: core::array::from_fn(|_| splitmix64(&mut sm)),
-            spare: None,
         }
     }
 
@@ -58,22 +56,9 @@ impl Rng {
         p > 0.0 && self.uniform() < p
     }
 
-    /// Standard normal (Marsaglia's polar method, both outputs used): no trigonometry, which
-    /// matters at a thousand IMU draws per simulated second.
+    /// Standard normal.
     pub fn gauss(&mut self) -> f64 {
-        if let Some(z) = self.spare.take() {
-            return z;
-        }
-        loop {
-            let u = 2.0 * self.uniform() - 1.0;
-            let v = 2.0 * self.uniform() - 1.0;
-            let s = u * u + v * v;
-            if s > 0.0 && s < 1.0 {
-                let k = (-2.0 * s.ln() / s).sqrt();
-                self.spare = Some(v * k);
-                return u * k;
-            }
-        }
+        crate::ziggurat::standard_normal(self)
     }
 }
 

@@ -218,7 +218,7 @@ pub fn run(
     let scene = Scene::new(world);
     let mut mismatch_rng = Rng::fork(config.seed, stream::MISMATCH);
     let mismatch = core::array::from_fn(|_| 1.0 + v.motor_mismatch * mismatch_rng.gauss());
-    let dynamics = Dynamics::new(v, mismatch);
+    let dynamics = Dynamics::new(v, mismatch, dt);
     let mut lidar = Lidar::new(
         config.lidar.clone(),
         Rng::fork(config.seed, stream::LIDAR),
@@ -349,7 +349,7 @@ pub fn run(
 
         // Physics.
         let before = s;
-        s = dynamics.step(&s, &forcing, dt);
+        s = dynamics.step(&s, &forcing);
         k += 1;
         let t = k as f64 / hz;
         if !s.is_finite() || s.velocity.norm() > 100.0 || s.rate.norm() > 200.0 {
@@ -372,7 +372,7 @@ pub fn run(
         out.distance_flown_m += (s.position - before.position).norm();
 
         // Power and battery.
-        let omega_dot = core::array::from_fn(|i| dynamics.rotor_acceleration(&s, i));
+        let omega_dot = dynamics.rotor_acceleration(&s);
         let split = power(v, &s.rotor_speed, &omega_dot);
         let power_w = split.total_w();
         energy.add(&split, dt);

@@ -128,9 +128,11 @@ fn hover_hold_is_tight_and_a_push_moves_the_vehicle() {
     assert_eq!(pushed.status, Status::Completed, "the pilot recovers");
     let gusty = config("room", 1);
     let g = run(&gusty, hold(&gusty, 10.0), &mut Discard).unwrap();
+    // Gusts shake the vehicle about: it travels further holding the same point. (Its largest
+    // error is the take-off transient of the motor mismatch, in calm air as in gusts.)
     assert!(
-        g.max_hold_error_m.unwrap() > calm.max_hold_error_m.unwrap(),
-        "gusts disturb the hold"
+        g.distance_flown_m > calm.distance_flown_m + 0.02,
+        "gusts disturb the hold: {g:?} vs {calm:?}"
     );
 }
 
