@@ -2,10 +2,13 @@
 //! at 1 kHz physics, and ray casting against a 200-wall world.
 //!
 //! Criterion reports throughput: for `survey` the elements are physics steps (1 ms each), so the
-//! real-time factor is elements per second / 1000; for `rays` the elements are rays.
+//! real-time factor is elements per second / 1000; for `rays` the elements are rays. `rays/*`
+//! casts each ray on its own through the scene's grid; `rays/*_scans` casts the same rays the way
+//! the lidar does, 360 beams per place through [`Nearby`], its set-up at every place included.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use plumbline_sim::math::Vec3;
+use plumbline_sim::nearby::Nearby;
 use plumbline_sim::plan::{Plan, PlanLimits};
 use plumbline_sim::runner::{run, Discard, Pilot, SimConfig};
 use plumbline_sim::scene::Scene;
@@ -64,6 +67,20 @@ fn rays(c: &mut Criterion) {
                 for o in &origins {
                     for d in &dirs {
                         sum += scene.cast(*o, *d, range, &[]).map_or(0.0, |h| h.range_m);
+                    }
+                }
+                black_box(sum)
+            })
+        });
+        g.bench_function(format!("{name}_scans"), |b| {
+            b.iter(|| {
+                let mut near = Nearby::new(range);
+                let mut sum = 0.0;
+                for o in &origins {
+                    for d in &dirs {
+                        sum += near
+                            .cast(&scene, *o, *d, range, &[])
+                            .map_or(0.0, |h| h.range_m);
                     }
                 }
                 black_box(sum)

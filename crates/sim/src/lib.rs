@@ -14,6 +14,7 @@ pub mod disturb;
 pub mod dynamics;
 pub mod math;
 pub mod motors;
+pub mod nearby;
 pub mod occupancy;
 pub mod onboard_link;
 pub mod pilot;

@@ -53,8 +53,7 @@ impl Scene {
         let origin = [x0 - cell, y0 - cell];
         let nx = (((x1 - origin[0]) / cell).ceil() as usize + 1).max(1);
         let ny = (((y1 - origin[1]) / cell).ceil() as usize + 1).max(1);
-        let cell_of =
-            |v: f64, o: f64, n: usize| (((v - o) / cell).floor().max(0.0) as usize).min(n - 1);
+        let cell_of = |v: f64, o: f64, n: usize| (((v - o) / cell).max(0.0) as usize).min(n - 1);
         let mut lists: Vec<Vec<u32>> = vec![Vec::new(); nx * ny];
         for (i, s) in world.walls.iter().enumerate() {
             let (cx0, cx1) = (
@@ -100,12 +99,22 @@ impl Scene {
     /// Casts a ray from `o` along the unit vector `d`, up to `max_range_m`; `None` if nothing
     /// is closer.
     pub fn cast(&self, o: Vec3, d: Vec3, max_range_m: f64, people: &[Cylinder]) -> Option<Hit> {
-        let mut best = Hit {
-            range_m: max_range_m,
-            cos_incidence: 0.0,
-        };
-        let mut found = false;
-        // Floor and ceiling planes.
+        let bound = self.cast_open(o, d, max_range_m, people);
+        let limit = bound.map_or(max_range_m, |h| h.range_m);
+        self.cast_walls(o, d, limit).or(bound)
+    }
+
+    /// The floor, the ceiling and the people: what a ray meets before `max_range_m` besides
+    /// walls. The result bounds the wall search.
+    pub(crate) fn cast_open(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        max_range_m: f64,
+        people: &[Cylinder],
+    ) -> Option<Hit> {
+        let mut best = None;
+        let mut limit = max_range_m;
         let plane_t = if d.z < 0.0 {
             -o.z / d.z
         } else if d.z > 0.0 {
@@ -113,28 +122,25 @@ impl Scene {
         } else {
             f64::INFINITY
         };
-        if plane_t >= 0.0 && plane_t < best.range_m {
-            best = Hit {
+        if plane_t >= 0.0 && plane_t < limit {
+            limit = plane_t;
+            best = Some(Hit {
                 range_m: plane_t,
                 cos_incidence: d.z.abs(),
-            };
-            found = true;
+            });
         }
         for c in people {
             if let Some(t) = hit_cylinder(o, d, c) {
-                if t < best.range_m {
-                    best = Hit {
+                if t < limit {
+                    limit = t;
+                    best = Some(Hit {
                         range_m: t,
                         cos_incidence: 1.0,
-                    };
-                    found = true;
+                    });
                 }
             }
         }
-        if let Some(h) = self.cast_walls(o, d, best.range_m) {
-            return Some(h);
-        }
-        found.then_some(best)
+        best
     }
 
     /// The nearest wall closer than `limit` along the ray, walking the grid.
@@ -159,8 +165,9 @@ impl Scene {
             return None;
         }
         let start = [gx + d.x / cell * t0, gy + d.y / cell * t0];
-        let mut cx = (start[0].floor().max(0.0) as usize).min(self.nx - 1);
-        let mut cy = (start[1].floor().max(0.0) as usize).min(self.ny - 1);
+        // Clamped non-negative first, so truncation is floor (and needs no libm call).
+        let mut cx = (start[0].max(0.0) as usize).min(self.nx - 1);
+        let mut cy = (start[1].max(0.0) as usize).min(self.ny - 1);
         let axis = |p: f64, v: f64, c: usize| -> (i64, f64, f64) {
             if v > 0.0 {
                 (1, (c as f64 + 1.0 - p) / v, 1.0 / v)
@@ -174,16 +181,7 @@ impl Scene {
         let (sy, mut next_y, dty) = axis(gy, d.y / cell, cy);
         let mut best: Option<usize> = None;
         let mut best_t = limit;
-        let found = |best: Option<usize>, t: f64| {
-            best.map(|i| {
-                let s = &self.walls[i];
-                let (ex, ey) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
-                Hit {
-                    range_m: t,
-                    cos_incidence: (d.x * ey - d.y * ex).abs() / (ex * ex + ey * ey).sqrt(),
-                }
-            })
-        };
+        let found = |best: Option<usize>, t: f64| best.map(|i| wall_hit(&self.walls[i], d, t));
         loop {
             let c = cy * self.nx + cx;
             for &i in &self.items[self.starts[c] as usize..self.starts[c + 1] as usize] {
@@ -195,7 +193,8 @@ impl Scene {
                 }
             }
             let leave = next_x.min(next_y);
-            if best_t <= leave || leave > t1 {
+            // A wall exactly at the boundary may also be listed in the next cell only.
+            if best_t < leave || leave > t1 {
                 return found(best, best_t);
             }
             if next_x < next_y {
@@ -216,18 +215,35 @@ impl Scene {
         }
     }
 
+    /// Grid cells within `r_m` of `p` (floor plane): (columns, rows).
+    fn cells_around(
+        &self,
+        p: [f64; 2],
+        r_m: f64,
+    ) -> (
+        core::ops::RangeInclusive<usize>,
+        core::ops::RangeInclusive<usize>,
+    ) {
+        let cell = self.cell_m;
+        let span = |v: f64, o: f64, n: usize| {
+            // Truncation is floor here: the argument is clamped non-negative first.
+            let lo = (((v - r_m - o) / cell).max(0.0) as usize).min(n - 1);
+            let hi = (((v + r_m - o) / cell).max(0.0) as usize).min(n - 1);
+            lo..=hi
+        };
+        (
+            span(p[0], self.origin[0], self.nx),
+            span(p[1], self.origin[1], self.ny),
+        )
+    }
+
     /// Distance from `p` (floor plane) to the nearest wall, capped at `cap_m`: only the grid
     /// cells within the cap are searched, so the cost does not grow with the world.
     pub fn clearance(&self, p: [f64; 2], cap_m: f64) -> f64 {
-        let cell = self.cell_m;
-        let span = |v: f64, o: f64, n: usize| {
-            let lo = (((v - cap_m - o) / cell).floor().max(0.0) as usize).min(n - 1);
-            let hi = (((v + cap_m - o) / cell).floor().max(0.0) as usize).min(n - 1);
-            lo..=hi
-        };
+        let (xs, ys) = self.cells_around(p, cap_m);
         let mut best = cap_m;
-        for cy in span(p[1], self.origin[1], self.ny) {
-            for cx in span(p[0], self.origin[0], self.nx) {
+        for cy in ys {
+            for cx in xs.clone() {
                 let c = cy * self.nx + cx;
                 for &i in &self.items[self.starts[c] as usize..self.starts[c + 1] as usize] {
                     best = best.min(self.walls[i as usize].distance(p));
@@ -237,14 +253,40 @@ impl Scene {
         best
     }
 
+    /// Indices of the walls within `r_m` of `p` (floor plane), ascending, each once.
+    pub(crate) fn walls_near(&self, p: [f64; 2], r_m: f64, out: &mut Vec<u32>) {
+        out.clear();
+        let (xs, ys) = self.cells_around(p, r_m);
+        for cy in ys {
+            for cx in xs.clone() {
+                let c = cy * self.nx + cx;
+                out.extend_from_slice(
+                    &self.items[self.starts[c] as usize..self.starts[c + 1] as usize],
+                );
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out.retain(|&i| self.walls[i as usize].distance(p) <= r_m);
+    }
+
     /// The walls this scene was built from.
     pub fn walls(&self) -> &[Segment] {
         &self.walls
     }
 }
 
+/// What a ray along `d` meets when it hits wall `s` at distance `t`.
+pub(crate) fn wall_hit(s: &Segment, d: Vec3, t: f64) -> Hit {
+    let (ex, ey) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
+    Hit {
+        range_m: t,
+        cos_incidence: (d.x * ey - d.y * ex).abs() / (ex * ex + ey * ey).sqrt(),
+    }
+}
+
 /// Ray (3-D, walls are vertical) against a wall segment: distance along the ray.
-fn hit_segment(o: Vec3, d: Vec3, s: &Segment) -> Option<f64> {
+pub(crate) fn hit_segment(o: Vec3, d: Vec3, s: &Segment) -> Option<f64> {
     let (ex, ey) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
     let denom = d.x * ey - d.y * ex;
     let (ax, ay) = (s.a[0] - o.x, s.a[1] - o.y);

@@ -5,6 +5,7 @@
 //! moving or turning drone produces the motion skew a real spinning lidar has.
 
 use crate::math::Vec3;
+use crate::nearby::Nearby;
 use crate::rng::Rng;
 use crate::scene::{Cylinder, Scene};
 
@@ -137,6 +138,8 @@ pub struct Lidar {
     next_beam: usize,
     rev_start_s: f64,
     scan: LidarScan,
+    /// The walls within reach, kept between beams.
+    nearby: Nearby,
 }
 
 impl Lidar {
@@ -155,6 +158,7 @@ impl Lidar {
             ranges_m: Vec::with_capacity(profile.beams),
             valid: Vec::with_capacity(profile.beams),
         };
+        let profile_reach = profile.max_range_m;
         Self {
             profile,
             rng,
@@ -163,6 +167,7 @@ impl Lidar {
             next_beam: 0,
             rev_start_s: first_stamp_s,
             scan,
+            nearby: Nearby::new(profile_reach),
         }
     }
 
@@ -191,8 +196,9 @@ impl Lidar {
         {
             let (c, s) = self.dirs[self.next_beam];
             let dir = pose.x_axis * c + pose.y_axis * s;
-            let reading = scene
-                .cast(pose.origin, dir, p.max_range_m, people)
+            let reading = self
+                .nearby
+                .cast(scene, pose.origin, dir, p.max_range_m, people)
                 .and_then(|hit| {
                     let lost = hit.range_m < p.min_range_m
                         || hit.cos_incidence < p.min_cos_incidence
