@@ -11,7 +11,9 @@
 //! walls), the grid is faster and is used instead.
 //!
 //! Directions are binned by a pseudo-angle (a monotone, division-only stand-in for `atan2`),
-//! which is what makes the per-beam look-up cheap.
+//! which is what makes the per-beam look-up cheap. Each sector lists its walls nearest first,
+//! so a beam stops at the first wall that cannot be beaten: the one-cell-at-a-time early exit
+//! of the grid walk, which is what keeps long-range (30 m) beams cheap.
 
 use crate::math::Vec3;
 use crate::scene::{hit_segment, wall_hit, Cylinder, Hit, Scene};
@@ -53,7 +55,8 @@ pub struct Nearby {
     center: Option<[f64; 2]>,
     /// Too many walls within reach: cast through the grid.
     use_grid: bool,
-    walls: Vec<Segment>,
+    /// The walls within reach and their distance from the centre, nearest first.
+    walls: Vec<(f64, Segment)>,
     /// Walls of sector k are `walls[items[starts[k]..starts[k + 1]]]`.
     starts: Vec<u32>,
     items: Vec<u32>,
@@ -61,6 +64,9 @@ pub struct Nearby {
     ids: Vec<u32>,
     spans: Vec<(usize, usize)>,
 }
+
+/// Rounding allowance of the early exit, m.
+const EXIT_PAD_M: f64 = 1e-9;
 
 impl Nearby {
     /// For a sensor whose beams reach at most `reach_m` (its maximum range).
@@ -100,7 +106,12 @@ impl Nearby {
         let mut best = None;
         let k = sector_of(d.x, d.y);
         for &i in &self.items[self.starts[k] as usize..self.starts[k + 1] as usize] {
-            let wall = &self.walls[i as usize];
+            let (near, wall) = &self.walls[i as usize];
+            // The origin is within SLACK_M of the centre, so this wall and all after it are at
+            // least near - SLACK_M away along any ray.
+            if near - SLACK_M - EXIT_PAD_M >= best_t {
+                break;
+            }
             if let Some(t) = hit_segment(o, d, wall) {
                 if t < best_t {
                     best_t = t;
@@ -126,11 +137,14 @@ impl Nearby {
             return;
         }
         self.walls.clear();
-        self.walls
-            .extend(self.ids.iter().map(|&i| scene.walls()[i as usize]));
+        self.walls.extend(self.ids.iter().map(|&i| {
+            let w = scene.walls()[i as usize];
+            (w.distance(p), w)
+        }));
+        self.walls.sort_by(|a, b| a.0.total_cmp(&b.0));
         self.spans.clear();
         self.spans
-            .extend(self.walls.iter().map(|w| sectors_seen(w, p)));
+            .extend(self.walls.iter().map(|(near, w)| sectors_seen(w, *near, p)));
         // Counting sort of (sector, wall) pairs into the compressed lists.
         let mut counts = [0u32; SECTORS];
         for &(first, n) in &self.spans {
@@ -158,10 +172,10 @@ impl Nearby {
     }
 }
 
-/// The sectors (first, count) in which a beam from within `SLACK_M` of `c` can meet wall `w`.
-fn sectors_seen(w: &Segment, c: [f64; 2]) -> (usize, usize) {
+/// The sectors (first, count) in which a beam from within `SLACK_M` of `c` can meet wall `w`,
+/// `near` away from `c`.
+fn sectors_seen(w: &Segment, near: f64, c: [f64; 2]) -> (usize, usize) {
     let all = (0, SECTORS);
-    let near = w.distance(c);
     if near <= SLACK_M {
         return all;
     }
@@ -220,9 +234,10 @@ mod tests {
             x0 in 0.5f64..19.5, y0 in 0.5f64..9.5, z in 0.2f64..2.5,
             steps in prop::collection::vec((-0.08f64..0.08, -0.08f64..0.08), 1..40),
             yaw0 in -3.2f64..3.2, tilt in -0.4f64..0.4,
+            reach in prop::sample::select(vec![4.0, 30.0]),
         ) {
             let (_, scene) = office();
-            let mut near = Nearby::new(4.0);
+            let mut near = Nearby::new(reach);
             let (mut x, mut y, mut yaw) = (x0, y0, yaw0);
             for (dx, dy) in steps {
                 x = (x + dx).clamp(0.01, 19.99);
@@ -230,11 +245,29 @@ mod tests {
                 yaw += 0.37;
                 let o = Vec3::new(x, y, z);
                 let d = Vec3::new(tilt.cos() * yaw.cos(), tilt.cos() * yaw.sin(), tilt.sin());
-                let want = scene.cast(o, d, 4.0, &[]).map(|h| h.range_m);
-                let got = near.cast(&scene, o, d, 4.0, &[]).map(|h| h.range_m);
+                let want = scene.cast(o, d, reach, &[]).map(|h| h.range_m);
+                let got = near.cast(&scene, o, d, reach, &[]).map(|h| h.range_m);
                 prop_assert_eq!(got, want, "from {:?} along {:?}", o, d);
             }
         }
+    }
+
+    #[test]
+    fn the_early_exit_allows_for_the_sensor_having_moved() {
+        // Walls gathered around (0, 0); the sensor then moves 0.14 m toward the wall at x = 1
+        // and casts a beam tilted down, which meets the floor at 0.95 m but the wall first, at
+        // 0.86 m horizontally: closer than the wall's 1 m from where the walls were gathered.
+        let w = World::parse("start 0 0 0\nceiling 2.5\noutline -5 -5 1 -5 1 5 -5 5\n").unwrap();
+        let scene = Scene::new(&w);
+        let mut near = Nearby::new(4.0);
+        let tilt: f64 = 0.3;
+        let z = 0.95 * tilt.sin();
+        let d = Vec3::new(tilt.cos(), 0.0, -tilt.sin());
+        near.cast(&scene, Vec3::new(0.0, 0.0, z), d, 4.0, &[]);
+        let o = Vec3::new(0.14, 0.0, z);
+        let hit = near.cast(&scene, o, d, 4.0, &[]).unwrap();
+        assert!((hit.range_m - 0.86 / tilt.cos()).abs() < 1e-12, "{hit:?}");
+        assert_eq!(Some(hit), scene.cast(o, d, 4.0, &[]));
     }
 
     #[test]
