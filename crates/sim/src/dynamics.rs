@@ -47,16 +47,16 @@ impl BodyState {
         }
     }
 
+    /// No NaN or infinity anywhere. Checked every step, so by one sum: a NaN or an infinity in
+    /// any term makes the sum non-finite. (So would finite terms near 1e308 overflowing it,
+    /// which is no less a diverged state.)
     pub fn is_finite(&self) -> bool {
-        self.position.is_finite()
-            && self.velocity.is_finite()
-            && self.attitude.is_finite()
-            && self.rate.is_finite()
-            && self
-                .rotor_speed
-                .iter()
-                .chain(&self.motor)
-                .all(|v| v.is_finite())
+        let q = self.attitude;
+        let sum = (self.position + self.velocity + self.rate).dot(Vec3::new(1.0, 1.0, 1.0))
+            + (q.w + q.x + q.y + q.z)
+            + self.motor.iter().sum::<f64>()
+            + self.rotor_speed.iter().sum::<f64>();
+        sum.is_finite()
     }
 
     fn rotors(&self) -> Rotors {

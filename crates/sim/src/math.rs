@@ -181,20 +181,15 @@ impl Quat {
         self.conj().rotate(v)
     }
 
-    /// Time derivative for body rates `w`: q' = q ⊗ (0, w) / 2.
+    /// Time derivative for body rates `w`: q' = q ⊗ (0, w) / 2, the Hamilton product written
+    /// out without the zero scalar part (its products cannot be optimised away: 0 · NaN).
     pub fn derivative(self, w: Vec3) -> Quat {
-        let d = self
-            * Quat {
-                w: 0.0,
-                x: w.x,
-                y: w.y,
-                z: w.z,
-            };
+        let (p, q, r) = (0.5 * w.x, 0.5 * w.y, 0.5 * w.z);
         Quat {
-            w: 0.5 * d.w,
-            x: 0.5 * d.x,
-            y: 0.5 * d.y,
-            z: 0.5 * d.z,
+            w: -self.x * p - self.y * q - self.z * r,
+            x: self.w * p + self.y * r - self.z * q,
+            y: self.w * q - self.x * r + self.z * p,
+            z: self.w * r + self.x * q - self.y * p,
         }
     }
 
@@ -208,13 +203,15 @@ impl Quat {
         }
     }
 
+    /// Scaled to unit length (one division, four multiplications: it runs every step).
     pub fn normalized(self) -> Quat {
-        let n = (self.w * self.w + self.x * self.x + self.y * self.y + self.z * self.z).sqrt();
+        let k =
+            1.0 / (self.w * self.w + self.x * self.x + self.y * self.y + self.z * self.z).sqrt();
         Quat {
-            w: self.w / n,
-            x: self.x / n,
-            y: self.y / n,
-            z: self.z / n,
+            w: self.w * k,
+            x: self.x * k,
+            y: self.y * k,
+            z: self.z * k,
         }
     }
 
@@ -260,6 +257,17 @@ mod tests {
         assert!((ax - q.rotate(Vec3::new(1.0, 0.0, 0.0))).norm() < 1e-12);
         assert!((ay - q.rotate(Vec3::new(0.0, 1.0, 0.0))).norm() < 1e-12);
         assert!((az - q.rotate(Vec3::Z)).norm() < 1e-12);
+        let w = Vec3::new(0.4, -1.3, 2.2);
+        let d = q.derivative(w);
+        let full = q * Quat {
+            w: 0.0,
+            x: w.x,
+            y: w.y,
+            z: w.z,
+        };
+        for (a, b) in [(d.w, full.w), (d.x, full.x), (d.y, full.y), (d.z, full.z)] {
+            assert!((a - 0.5 * b).abs() < 1e-15, "q' = q ⊗ (0, w) / 2");
+        }
         let back = q.rotate_inv(q.rotate(Vec3::new(0.3, -1.0, 2.0)));
         assert!((back - Vec3::new(0.3, -1.0, 2.0)).norm() < 1e-12);
     }

@@ -121,6 +121,9 @@ const TEST_PILOT_HZ: f64 = 250.0;
 const SLOW_HZ: f64 = 100.0;
 /// Clearance is searched only this far (grid cells around the vehicle), m.
 pub const CLEARANCE_CAP_M: f64 = 2.0;
+/// Faster than this the state has diverged, m/s and rad/s.
+const MAX_SPEED_MPS: f64 = 100.0;
+const MAX_RATE_RADPS: f64 = 200.0;
 /// Touching down faster than this breaks the vehicle, m/s.
 const MAX_LANDING_SPEED_MPS: f64 = 2.0;
 
@@ -352,7 +355,10 @@ pub fn run(
         s = dynamics.step(&s, &forcing);
         k += 1;
         let t = k as f64 / hz;
-        if !s.is_finite() || s.velocity.norm() > 100.0 || s.rate.norm() > 200.0 {
+        if !s.is_finite()
+            || s.velocity.dot(s.velocity) > MAX_SPEED_MPS * MAX_SPEED_MPS
+            || s.rate.dot(s.rate) > MAX_RATE_RADPS * MAX_RATE_RADPS
+        {
             out.status = Status::Diverged { t_s: t };
             break;
         }
