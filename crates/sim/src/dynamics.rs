@@ -19,6 +19,7 @@
 use crate::math::{Quat, Vec3};
 use crate::motors::{MotorModel, Rotors};
 use crate::vehicle::{VehicleParams, GRAVITY};
+use core::cell::Cell;
 
 /// The integrated state: body pose and rates, the two motor stages of each rotor.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -119,6 +120,9 @@ pub struct Forcing {
 #[derive(Clone, Debug)]
 pub struct Dynamics {
     dt: f64,
+    /// The rotors the last step ended with and their wrench: the next step usually starts
+    /// there, and the wrench is a pure function of the rotors, so it is reused when they match.
+    last_end: Cell<Option<(Rotors, RotorWrench)>>,
     motors: MotorModel,
     /// Per-rotor k_T, with the motor mismatch applied.
     thrust_coeff: [f64; 4],
@@ -148,6 +152,7 @@ impl Dynamics {
         let thrust_coeff = mismatch.map(|m| p.thrust_coeff * m);
         Self {
             dt: dt_s,
+            last_end: Cell::new(None),
             motors: MotorModel::new(p.motor_tau_s, p.rotor_tau_s, p.max_rotor_speed_radps, dt_s),
             thrust_coeff,
             roll_coeff: core::array::from_fn(|i| rotors[i].position_m.y * thrust_coeff[i]),
@@ -220,7 +225,12 @@ impl Dynamics {
         let now = s.rotors();
         let mid = self.motors.half_step(&now, &f.command);
         let end = self.motors.full_step(&now, &f.command);
-        let (w_now, w_mid, w_end) = (self.wrench(&now), self.wrench(&mid), self.wrench(&end));
+        let w_now = match self.last_end.get() {
+            Some((r, w)) if r == now => w,
+            _ => self.wrench(&now),
+        };
+        let (w_mid, w_end) = (self.wrench(&mid), self.wrench(&end));
+        self.last_end.set(Some((end, w_end)));
         let b = Rigid {
             position: s.position,
             velocity: s.velocity,

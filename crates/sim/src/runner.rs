@@ -251,6 +251,9 @@ pub fn run(
     let control_dt = control_every as f64 * dt;
     let slow_every = (hz / SLOW_HZ).round().max(1.0) as u64;
     let state_every = (hz / STATE_RATE_HZ).round().max(1.0) as u64;
+    // The steps at which each rate is next due (counters, not `k % every`: a 64-bit division
+    // per rate per step is a measurable share of a 1 kHz step).
+    let (mut slow_due, mut control_due, mut state_due) = (0u64, 0u64, state_every);
     let mut test_pilot = TestPilot::new(v)
         .ok_or_else(|| SetupError::Config("rotor layout cannot be inverted".into()))?;
 
@@ -290,7 +293,8 @@ pub fn run(
             break;
         }
         // Slow processes: gusts, people, collision checks.
-        if k.is_multiple_of(slow_every) {
+        if k == slow_due {
+            slow_due += slow_every;
             if let Some(g) = gusts.as_mut() {
                 g.advance(slow_every as f64 * dt);
             }
@@ -313,7 +317,8 @@ pub fn run(
             }
         }
         // Flight software at its own rate.
-        if k.is_multiple_of(control_every) {
+        if k == control_due {
+            control_due += control_every;
             let cmd = match &mut pilot {
                 Pilot::Test(plan) => {
                     let r = plan.at(t);
@@ -431,7 +436,8 @@ pub fn run(
                 scan_buf.push(scan);
             }
         }
-        if k.is_multiple_of(state_every) {
+        if k == state_due {
+            state_due += state_every;
             let (roll, pitch, yaw) = s.attitude.to_euler();
             recorder.state(&StateSample {
                 t_s: t,
