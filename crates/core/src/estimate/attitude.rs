@@ -21,6 +21,12 @@ pub struct AttitudeConfig {
     pub accel_reject_fraction: f32,
     /// Bound on the gyro-bias estimate (rad/s), so a long misleading accelerometer cannot run it off.
     pub max_bias_rad_s: f32,
+    /// The initial tilt is the direction of the accelerometer averaged over this long (s) from
+    /// the first usable sample; the vehicle sits still on the floor meanwhile. One sample of an
+    /// ADIS16365-class unit at 500 Hz is about 0.45 m/s^2 off, 2.6 degrees of tilt: taken
+    /// alone it left the tilt that far off, the EKF's accelerometer bias soaked up most of it,
+    /// and in IMU-only flight the vehicle then flew that tilt into a wall.
+    pub align_s: f32,
 }
 
 impl AttitudeConfig {
@@ -44,6 +50,7 @@ impl Default for AttitudeConfig {
             ki_per_s2: 0.002,
             accel_reject_fraction: 0.25,
             max_bias_rad_s: 0.1,
+            align_s: 0.4,
         }
     }
 }
@@ -61,8 +68,9 @@ pub struct AttitudeFilter {
     pub config: AttitudeConfig,
     rotation: UnitQuaternion<f32>,
     bias_rad_s: Vector3<f32>,
-    /// False until a sample near 1 g has set the initial tilt (the vehicle starts at rest).
-    initialised: bool,
+    /// Sum of the accelerometer samples of the initial alignment, and the time they span (s).
+    align_sum: Vector3<f32>,
+    aligned_s: f32,
 }
 
 impl AttitudeFilter {
@@ -71,7 +79,8 @@ impl AttitudeFilter {
             config,
             rotation: UnitQuaternion::identity(),
             bias_rad_s: Vector3::zeros(),
-            initialised: false,
+            align_sum: Vector3::zeros(),
+            aligned_s: 0.0,
         }
     }
 
@@ -105,6 +114,17 @@ impl AttitudeFilter {
         self.rotation = UnitQuaternion::from_scaled_axis(axis) * self.rotation;
     }
 
+    /// Adds a gyro x/y bias correction (rad/s, body) estimated elsewhere (the EKF).
+    pub fn correct_bias(&mut self, error: [f32; 2]) {
+        if !error.iter().all(|e| e.is_finite()) {
+            return;
+        }
+        let b = self.config.max_bias_rad_s;
+        for (i, e) in error.iter().enumerate() {
+            self.bias_rad_s[i] = (self.bias_rad_s[i] + e).clamp(-b, b);
+        }
+    }
+
     /// One step with a gyro and accelerometer sample. Bad samples leave the state unchanged.
     pub fn update(
         &mut self,
@@ -125,12 +145,13 @@ impl AttitudeFilter {
         let norm = accel.norm();
         let misfit = libm::fabsf(norm / GRAVITY_M_S2 - 1.0) / c.accel_reject_fraction;
         let weight = (1.0 - misfit).max(0.0);
-        if weight > 0.0 && !self.initialised {
-            // First usable sample: take the tilt from gravity at once instead of converging to it.
-            let up = accel / norm;
-            let tilt = UnitQuaternion::rotation_between(&up, &Vector3::z());
+        if weight > 0.0 && self.aligned_s < c.align_s {
+            // Alignment at rest: the tilt is that of the mean specific force so far, taken at
+            // once instead of converged to.
+            self.align_sum += accel;
+            self.aligned_s += dt;
+            let tilt = UnitQuaternion::rotation_between(&self.align_sum, &Vector3::z());
             self.rotation = tilt.unwrap_or_else(UnitQuaternion::identity);
-            self.initialised = true;
             return Ok(());
         }
         if weight > 0.0 {
@@ -212,6 +233,28 @@ mod tests {
         assert!(
             (roll - 0.1).abs() < 1e-4 && (pitch - 0.25).abs() < 1e-4,
             "{roll} {pitch}"
+        );
+    }
+
+    #[test]
+    fn alignment_averages_out_the_accelerometer_noise() {
+        let mut f = AttitudeFilter::new(AttitudeConfig::default());
+        let truth = resting_accel(0.05, -0.02);
+        // Noise of one 500 Hz sample (0.45 m/s^2, 2.6 degrees of tilt), alternating in sign.
+        let noisy = |k: usize| {
+            let n = if k.is_multiple_of(2) { 0.45 } else { -0.45 };
+            [truth[0] + n, truth[1] - n, truth[2]]
+        };
+        f.update([0.0; 3], noisy(0), 0.002).unwrap();
+        let (roll, pitch) = f.roll_pitch();
+        assert!((pitch + 0.02).abs() > 0.04, "one sample is that far off");
+        for k in 1..200 {
+            f.update([0.0; 3], noisy(k), 0.002).unwrap();
+        }
+        let (roll_end, pitch_end) = f.roll_pitch();
+        assert!(
+            (roll_end - 0.05).abs() < 5e-4 && (pitch_end + 0.02).abs() < 5e-4,
+            "{roll} {pitch} -> {roll_end} {pitch_end}"
         );
     }
 

@@ -2,21 +2,23 @@
 //! model goes through.
 //!
 //! State (world frame, f32): position (3), velocity (3), yaw, accelerometer bias (body, 3), gyro
-//! z bias, the tilt error of the attitude filter (2), and a clone of (x, y, yaw) at the scan
-//! matcher's reference scan. The clone makes the matcher's *relative* pose change an ordinary
+//! z bias, the tilt error of the attitude filter (2) and of its gyro x/y bias (2), and a clone of
+//! (x, y, yaw) at the scan matcher's reference scan. The clone makes the matcher's *relative* pose change an ordinary
 //! measurement with correct correlations ("stochastic cloning"): the prediction is the current
 //! pose seen from the cloned one. Roll and pitch come from [`super::attitude`]; the filter
 //! carries that estimate's small error about world x and y, because a multirotor's accelerometer
 //! sees mostly thrust and cannot tell tilt from acceleration, while the lidar can: a tilt error
 //! turns into a velocity error the scan matches reveal, and the estimator feeds the estimated
 //! error back into the tilt filter. The biases kept are the ones that drift the hold point
-//! (horizontal accelerometer bias), the height (vertical accelerometer bias) and the heading
+//! (horizontal accelerometer bias, and the gyro x/y bias, which turns the tilt at a steady rate:
+//! the tilt filter's own slow integral left up to 0.003 rad/s there, 0.2 degrees of tilt a second
+//! once the lidar stops correcting it), the height (vertical accelerometer bias) and the heading
 //! (gyro z bias).
 
 use nalgebra::{SMatrix, SVector};
 
 /// Number of states.
-pub const N: usize = 16;
+pub const N: usize = 18;
 /// Indices into the state vector.
 pub mod ix {
     pub const POS: usize = 0;
@@ -26,8 +28,10 @@ pub mod ix {
     pub const GYRO_Z_BIAS: usize = 10;
     /// Small-angle error of the tilt filter about world x and y (true = exp(error) * estimate).
     pub const TILT: usize = 11;
+    /// Error of the tilt filter's gyro bias about body x and y (true = estimate + error).
+    pub const GYRO_XY_BIAS: usize = 13;
     /// Clone of x, y and yaw at the reference scan.
-    pub const CLONE: usize = 13;
+    pub const CLONE: usize = 15;
 }
 
 pub type State = SVector<f32, N>;
@@ -38,7 +42,8 @@ pub type Covariance = SMatrix<f32, N, N>;
 pub struct EkfConfig {
     /// Initial one-sigma of position (m), velocity (m/s), yaw (rad).
     pub initial_std: [f32; 3],
-    /// Initial one-sigma of accelerometer bias (m/s^2) and gyro z bias (rad/s).
+    /// Initial one-sigma of accelerometer bias (m/s^2) and gyro bias (rad/s; z, and the error of
+    /// the tilt filter's x/y estimate).
     pub initial_bias_std: [f32; 2],
     /// Initial one-sigma of the tilt filter's error (rad).
     pub initial_tilt_std_rad: f32,
@@ -51,7 +56,7 @@ pub struct EkfConfig {
     pub accel_bias_walk: f32,
     pub gyro_bias_walk: f32,
     /// The covariance is propagated at most this often (s); the state every step. Keeps the
-    /// 14x14 products off the per-IMU-sample path.
+    /// N x N products off the per-IMU-sample path.
     pub covariance_period_s: f32,
     /// Normalised innovation squared above which a measurement is rejected, for 1, 2 and 3
     /// dimensions (chi-square 99.7 %).
@@ -175,6 +180,7 @@ impl Ekf {
         for i in 0..2 {
             p[(ix::TILT + i, ix::TILT + i)] =
                 config.initial_tilt_std_rad * config.initial_tilt_std_rad;
+            p[(ix::GYRO_XY_BIAS + i, ix::GYRO_XY_BIAS + i)] = sg * sg;
         }
         for i in 0..3 {
             p[(ix::CLONE + i, ix::CLONE + i)] = 1.0;
@@ -201,7 +207,7 @@ impl Ekf {
     /// Finite state and covariance, and a horizontal position one-sigma within bounds.
     pub fn is_valid(&self) -> bool {
         // The diagonal suffices: a non-finite covariance entry reaches the diagonal at the next
-        // propagation, and checking all 256 entries every step cost more than the prediction.
+        // propagation, and checking every entry each step cost more than the prediction.
         let finite = self.x.iter().all(|v| v.is_finite())
             && (0..N).all(|i| self.p[(i, i)].is_finite() && self.p[(i, i)] >= 0.0);
         let var_xy = self.p[(ix::POS, ix::POS)].max(self.p[(ix::POS + 1, ix::POS + 1)]);
@@ -209,13 +215,15 @@ impl Ekf {
         finite && var_xy >= 0.0 && var_xy <= max * max
     }
 
-    /// Hands out the estimated tilt-filter error (about world x, y; rad) and zeroes it: the
-    /// caller applies it to the tilt filter (the error-state reset; covariance is kept).
-    pub fn take_tilt_error(&mut self) -> [f32; 2] {
-        let e = [self.x[ix::TILT], self.x[ix::TILT + 1]];
-        self.x[ix::TILT] = 0.0;
-        self.x[ix::TILT + 1] = 0.0;
-        e
+    /// Hands out the estimated tilt-filter errors and zeroes them: the tilt (about world x, y;
+    /// rad) and the gyro x/y bias (body; rad/s). The caller applies them to the tilt filter (the
+    /// error-state reset; covariance is kept).
+    pub fn take_tilt_error(&mut self) -> ([f32; 2], [f32; 2]) {
+        let take =
+            |x: &mut State, i: usize| [core::mem::take(&mut x[i]), core::mem::take(&mut x[i + 1])];
+        let tilt = take(&mut self.x, ix::TILT);
+        let bias = take(&mut self.x, ix::GYRO_XY_BIAS);
+        (tilt, bias)
     }
 
     /// Forgets what the filter knew about the given states: their correlations are cut and
@@ -255,6 +263,19 @@ impl Ekf {
         h: SMatrix<f32, M, N>,
         r: SMatrix<f32, M, M>,
     ) -> Outcome {
+        self.update_considering(residual, h, r, &[])
+    }
+
+    /// [`Self::update`] that leaves the states in `consider` alone (their gain rows are zero;
+    /// the Schmidt-Kalman "consider" update). The Joseph form keeps the covariance right for any
+    /// gain, so their variances and correlations still account for the measurement.
+    pub fn update_considering<const M: usize>(
+        &mut self,
+        residual: SVector<f32, M>,
+        h: SMatrix<f32, M, N>,
+        r: SMatrix<f32, M, M>,
+        consider: &[usize],
+    ) -> Outcome {
         if !(residual.iter().all(|v| v.is_finite())
             && h.iter().all(|v| v.is_finite())
             && r.iter().all(|v| v.is_finite()))
@@ -274,7 +295,10 @@ impl Ekf {
         if nis > gate {
             return Outcome::Rejected;
         }
-        let k = pht * chol.inverse();
+        let mut k = pht * chol.inverse();
+        for &i in consider {
+            k.row_mut(i).fill(0.0);
+        }
         self.x += k * residual;
         let ikh = Covariance::identity() - k * h;
         self.p = ikh * self.p * ikh.transpose() + k * r * k.transpose();
@@ -342,6 +366,34 @@ mod tests {
         );
         assert_eq!(bad, Outcome::Invalid);
         assert!(f.is_valid());
+    }
+
+    #[test]
+    fn considered_states_keep_their_value_and_variance() {
+        let mut f = Ekf::new(EkfConfig::default());
+        // Position and velocity correlated, as after a stretch of prediction.
+        f.p[(ix::POS, ix::VEL)] = 1e-3;
+        f.p[(ix::VEL, ix::POS)] = 1e-3;
+        let (p_before, var_before) = (f.x[ix::POS], f.p[(ix::POS, ix::POS)]);
+        let mut h = SMatrix::<f32, 1, N>::zeros();
+        h[(0, ix::VEL)] = 1.0;
+        let r = SMatrix::<f32, 1, 1>::new(0.0025);
+        let out = f.update_considering(SVector::<f32, 1>::new(0.1), h, r, &[ix::POS]);
+        assert_eq!(out, Outcome::Accepted);
+        assert!(f.x[ix::VEL] > 0.04, "{}", f.x[ix::VEL]);
+        assert_eq!(
+            (f.x[ix::POS], f.p[(ix::POS, ix::POS)]),
+            (p_before, var_before)
+        );
+        // The correlation shrinks with the velocity's variance.
+        assert!(f.p[(ix::POS, ix::VEL)] < 1e-3);
+        assert_eq!(f.p, f.p.transpose());
+        // A plain update moves the correlated position too.
+        let mut g = Ekf::new(EkfConfig::default());
+        g.p[(ix::POS, ix::VEL)] = 1e-3;
+        g.p[(ix::VEL, ix::POS)] = 1e-3;
+        g.update(SVector::<f32, 1>::new(0.1), h, r);
+        assert!(g.x[ix::POS] > 0.01, "{}", g.x[ix::POS]);
     }
 
     #[test]

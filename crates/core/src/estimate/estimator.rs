@@ -5,6 +5,7 @@
 
 use super::at_rest::AtRestConfig;
 use super::attitude::{AttitudeConfig, AttitudeFilter};
+use super::drag::{DragConfig, DragWindow};
 use super::ekf::{ix, Counters, Ekf, EkfConfig, Outcome};
 use super::imu::ImuStep;
 use super::sonar::SonarConfig;
@@ -18,6 +19,7 @@ pub struct EstimatorConfig {
     pub ekf: EkfConfig,
     pub sonar: SonarConfig,
     pub at_rest: AtRestConfig,
+    pub drag: DragConfig,
 }
 
 /// What happened to the inputs so far.
@@ -28,6 +30,7 @@ pub struct EstimatorCounters {
     pub scan_match: Counters,
     pub sonar: Counters,
     pub at_rest: Counters,
+    pub drag: Counters,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,6 +38,7 @@ pub struct Estimator {
     pub config: EstimatorConfig,
     attitude: AttitudeFilter,
     ekf: Ekf,
+    drag_window: DragWindow,
     counters: EstimatorCounters,
 }
 
@@ -44,6 +48,7 @@ impl Estimator {
             config,
             attitude: AttitudeFilter::new(config.attitude),
             ekf: Ekf::new(config.ekf),
+            drag_window: DragWindow::default(),
             counters: EstimatorCounters::default(),
         }
     }
@@ -65,11 +70,13 @@ impl Estimator {
 
     /// Tilt filter then EKF prediction. Returns false (and counts it) if the sample was refused.
     pub fn predict(&mut self, imu: &ImuSample, dt: f32) -> bool {
-        if self
-            .attitude
-            .update(imu.gyro_rad_s, imu.accel_m_s2, dt)
-            .is_err()
-        {
+        // The tilt filter's gravity reference is the specific force with the EKF's accelerometer
+        // bias removed, the same force the EKF predicts with: fed the raw reading, the tilt
+        // filter pulled toward a tilt the EKF kept correcting away, and once the lidar stopped
+        // the two no longer agreed on which way was level.
+        let bias = self.ekf.state().fixed_rows::<3>(ix::ACCEL_BIAS);
+        let accel: [f32; 3] = core::array::from_fn(|i| imu.accel_m_s2[i] - bias[i]);
+        if self.attitude.update(imu.gyro_rad_s, accel, dt).is_err() {
             self.counters.imu_faults = self.counters.imu_faults.saturating_add(1);
             return false;
         }
@@ -83,10 +90,29 @@ impl Estimator {
             pitch_rad,
         };
         let ok = self.ekf.predict(&step, dt).is_ok();
-        if !ok {
+        if ok {
+            self.drag_window.add(imu.accel_m_s2, dt);
+        } else {
             self.counters.imu_faults = self.counters.imu_faults.saturating_add(1);
         }
         ok
+    }
+
+    /// Fuses the accelerometer's drag reading once a window is full, if the vehicle has been
+    /// `flying` on its rotors the whole window; otherwise the window is dropped. Rejections (a push, a
+    /// collision) are counted and never reopen anything: the lidar, not this, is the position
+    /// reference.
+    pub fn fuse_drag(&mut self, flying: bool) -> Option<Outcome> {
+        if !flying {
+            self.drag_window.clear();
+            return None;
+        }
+        let mean = self.drag_window.take(self.config.drag.window_s)?;
+        let (roll, pitch) = self.attitude.roll_pitch();
+        let outcome = self.ekf.fuse_drag(&self.config.drag, mean, roll, pitch);
+        self.counters.drag.record(outcome);
+        self.feed_back_tilt();
+        Some(outcome)
     }
 
     /// Fuses a scan-matcher result; after a run of rejections the horizontal pose and velocity
@@ -151,11 +177,13 @@ impl Estimator {
         outcome
     }
 
-    /// Moves the EKF's tilt-error estimate into the tilt filter (error-state reset).
+    /// Moves the EKF's tilt and gyro-bias error estimates into the tilt filter (error-state
+    /// reset).
     fn feed_back_tilt(&mut self) {
         let heading = self.ekf.state()[ix::YAW];
-        let error = self.ekf.take_tilt_error();
-        self.attitude.correct_tilt(error, heading);
+        let (tilt, gyro_bias) = self.ekf.take_tilt_error();
+        self.attitude.correct_tilt(tilt, heading);
+        self.attitude.correct_bias(gyro_bias);
     }
 
     /// The estimate as the controllers and the log see it.

@@ -29,7 +29,7 @@ pub enum PredictError {
 }
 
 /// ZYX Euler rotation, body FLU to world.
-fn rotation(roll: f32, pitch: f32, yaw: f32) -> Matrix3<f32> {
+pub(super) fn rotation(roll: f32, pitch: f32, yaw: f32) -> Matrix3<f32> {
     let (sr, cr) = (sinf(roll), cosf(roll));
     let (sp, cp) = (sinf(pitch), cosf(pitch));
     let (sy, cy) = (sinf(yaw), cosf(yaw));
@@ -119,6 +119,12 @@ impl Ekf {
         f[(ix::VEL + 1, ix::TILT)] = -u.z * dt;
         f[(ix::VEL + 2, ix::TILT)] = u.y * dt;
         f[(ix::VEL + 2, ix::TILT + 1)] = -u.x * dt;
+        // A gyro bias error b turns the estimate by b dt in the body: d(phi)/d(b) = -R.
+        for i in 0..2 {
+            for j in 0..2 {
+                f[(ix::TILT + i, ix::GYRO_XY_BIAS + j)] = -r[(i, j)] * dt;
+            }
+        }
         self.p = f * self.p * f.transpose();
 
         let c = &self.config;
@@ -138,6 +144,8 @@ impl Ekf {
         self.p[(ix::TILT, ix::TILT)] += qg;
         self.p[(ix::TILT + 1, ix::TILT + 1)] += qg;
         self.p[(ix::GYRO_Z_BIAS, ix::GYRO_Z_BIAS)] += qbg;
+        self.p[(ix::GYRO_XY_BIAS, ix::GYRO_XY_BIAS)] += qbg;
+        self.p[(ix::GYRO_XY_BIAS + 1, ix::GYRO_XY_BIAS + 1)] += qbg;
     }
 }
 

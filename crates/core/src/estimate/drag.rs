@@ -1,0 +1,224 @@
+//! Drag measurement: a multirotor's accelerometer reads its air-relative velocity in the body
+//! x/y specific force.
+//!
+//! Thrust acts along body z, so in the body x/y plane the only force the accelerometer feels is
+//! aerodynamic: rotor induced drag (blade flapping) and fuselage drag, close to linear in the
+//! air-relative velocity at indoor speeds, `f_xy = -c (R^T v)_xy + b_xy` (Leishman, Martin and
+//! Salaün 2010, "The true role of accelerometer feedback in quadrotor control"; the "drag
+//! fusion" of PX4's and ArduPilot's EKFs). It is what keeps an IMU-only velocity bounded: the
+//! tilt-and-thrust prediction integrates any tilt error into a growing velocity, while this
+//! measurement ties the velocity to the force the vehicle feels. Air is taken as still: a
+//! draught reads as ground velocity, which the measurement noise allows for (wind states, tried,
+//! changed nothing measurable in the simulator's draughty room, see BENCHMARKS.md).
+//!
+//! The accelerometer is averaged over a window before it is fused, which divides its noise and
+//! keeps the filter update off the per-sample path. Only fused while the vehicle flies on its
+//! rotors: on the floor the x/y specific force is gravity along a tilted floor, and a push or a
+//! collision is a force this model does not know (the innovation gate rejects it).
+
+use super::ekf::{ix, Ekf, Outcome, N};
+use super::imu::rotation;
+use nalgebra::{Matrix2, Matrix3, SMatrix, Vector2, Vector3};
+
+/// Drag model settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DragConfig {
+    /// Linear drag per unit mass c (1/s): body x/y specific force per m/s of body air velocity.
+    /// Default: the simulator's F450, 0.12 N/(m/s) on 1.2 kg. A real airframe's figure comes from
+    /// a flight with the lidar working (specific force against the lidar velocity); zero turns
+    /// the measurement off.
+    pub drag_per_s: f32,
+    /// Accelerometer samples are averaged over this long before one fusion (s).
+    pub window_s: f32,
+    /// One-sigma of a window's mean x/y specific force about the model (m/s^2). Accelerometer
+    /// noise over the window (0.02 m/s^2/sqrt(Hz) / sqrt(0.1 s) = 0.06), draughts (0.3 m/s of
+    /// air at c = 0.1 is 0.03, lasting seconds) and the quadratic drag the model leaves out
+    /// (0.01 at 0.3 m/s) come to about 0.1; it is widened to 0.3 because at 0.1 the IMU-only
+    /// velocity after a lidar loss followed the accelerometer's noise, the hold chased it, and
+    /// the vehicle strayed further (BENCHMARKS.md, issue 4).
+    pub specific_force_std_m_s2: f32,
+}
+
+impl Default for DragConfig {
+    fn default() -> Self {
+        Self {
+            drag_per_s: 0.1,
+            window_s: 0.1,
+            specific_force_std_m_s2: 0.3,
+        }
+    }
+}
+
+/// The accelerometer's x/y specific force summed over the current window.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DragWindow {
+    sum_m_s2: [f32; 2],
+    samples: u32,
+    span_s: f32,
+}
+
+impl DragWindow {
+    pub fn add(&mut self, accel_m_s2: [f32; 3], dt: f32) {
+        self.sum_m_s2[0] += accel_m_s2[0];
+        self.sum_m_s2[1] += accel_m_s2[1];
+        self.samples += 1;
+        self.span_s += dt;
+    }
+
+    /// The window's mean once it spans `window_s`, and a fresh window; `None` before that.
+    pub fn take(&mut self, window_s: f32) -> Option<[f32; 2]> {
+        if self.span_s < window_s || self.samples == 0 {
+            return None;
+        }
+        let n = self.samples as f32;
+        let mean = [self.sum_m_s2[0] / n, self.sum_m_s2[1] / n];
+        *self = Self::default();
+        Some(mean)
+    }
+
+    /// Forgets the samples so far (the vehicle touched the floor, or was not flying).
+    pub fn clear(&mut self) {
+        *self = Self::default();
+    }
+}
+
+impl Ekf {
+    /// Fuses one window's mean body x/y specific force, taken at the given tilt.
+    pub fn fuse_drag(
+        &mut self,
+        c: &DragConfig,
+        specific_m_s2: [f32; 2],
+        roll: f32,
+        pitch: f32,
+    ) -> Outcome {
+        if !(c.drag_per_s > 0.0 && roll.is_finite() && pitch.is_finite()) {
+            return Outcome::Invalid;
+        }
+        let k = c.drag_per_s;
+        let yaw = self.x[ix::YAW];
+        let r = rotation(roll, pitch, yaw);
+        let rt = r.transpose();
+        let v = self.x.fixed_rows::<3>(ix::VEL).into_owned();
+        let body = rt * v;
+        let bias = Vector2::new(self.x[ix::ACCEL_BIAS], self.x[ix::ACCEL_BIAS + 1]);
+        let predicted = Vector2::new(-k * body.x, -k * body.y) + bias;
+        let residual = Vector2::from(specific_m_s2) - predicted;
+
+        let mut h = SMatrix::<f32, 2, N>::zeros();
+        // d(R^T v)/d(v) = R^T.
+        for i in 0..2 {
+            for j in 0..3 {
+                h[(i, ix::VEL + j)] = -k * rt[(i, j)];
+            }
+            h[(i, ix::ACCEL_BIAS + i)] = 1.0;
+        }
+        // R = Rz(yaw) T with T the tilt, so d(R^T v)/d(yaw) = T^T d(Rz^T)/d(yaw) v.
+        let (s, co) = libm::sincosf(yaw);
+        let tilt_t = rotation(roll, pitch, 0.0).transpose();
+        let d_yaw = tilt_t * Vector3::new(-s * v.x + co * v.y, -co * v.x - s * v.y, 0.0);
+        // True R = exp(phi) R: R^T v becomes R^T (v + v x phi), so d/d(phi) = R^T [v]x.
+        let d_tilt = rt * Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0);
+        for i in 0..2 {
+            h[(i, ix::YAW)] = -k * d_yaw[i];
+            h[(i, ix::TILT)] = -k * d_tilt[(i, 0)];
+            h[(i, ix::TILT + 1)] = -k * d_tilt[(i, 1)];
+        }
+        let sigma = c.specific_force_std_m_s2;
+        let r = Matrix2::identity() * (sigma * sigma);
+        let position = [
+            ix::POS,
+            ix::POS + 1,
+            ix::POS + 2,
+            ix::CLONE,
+            ix::CLONE + 1,
+            ix::CLONE + 2,
+        ];
+        self.update_considering(residual, h, r, &position)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::estimate::ekf::EkfConfig;
+    use crate::estimate::imu::tests::hover_step;
+    use crate::estimate::imu::ImuStep;
+    use crate::msgs::GRAVITY_M_S2;
+
+    #[test]
+    fn window_mean_comes_out_once_the_window_is_full() {
+        let mut w = DragWindow::default();
+        w.add([0.1, -0.2, 9.8], 0.05);
+        assert_eq!(w.take(0.1), None);
+        w.add([0.3, 0.0, 9.8], 0.05);
+        let mean = w.take(0.1).unwrap();
+        assert!((mean[0] - 0.2).abs() < 1e-6 && (mean[1] + 0.1).abs() < 1e-6);
+        assert_eq!(w, DragWindow::default());
+    }
+
+    /// A vehicle pitched 2 degrees forward that the filter starts out believing level, with
+    /// the EKF's tilt estimate fed back as the estimator does. Returns the final velocity error
+    /// (m/s) and tilt error (rad). Without drag the tilt is unobservable and the IMU-only
+    /// velocity runs away at g tan(2 degrees); with it, the filter finds the tilt and bounds the
+    /// velocity error.
+    fn run(drag: bool) -> (f32, f32) {
+        let mut f = Ekf::new(EkfConfig::default());
+        let c = DragConfig::default();
+        let tilt = 2.0f32.to_radians();
+        let (dt, mut v_true, mut pitch_est) = (0.002f32, 0.0f32, 0.0f32);
+        let mut window = DragWindow::default();
+        for _ in 0..(20.0 / dt) as usize {
+            // True dynamics along x: thrust tilted forward, drag -c v.
+            let drag_accel = -c.drag_per_s * v_true;
+            v_true += (GRAVITY_M_S2 * libm::tanf(tilt) + drag_accel) * dt;
+            // The accelerometer: thrust on body z (holding height), drag on body x.
+            let specific = [drag_accel, 0.0, GRAVITY_M_S2 / libm::cosf(tilt)];
+            let step = ImuStep {
+                accel_m_s2: specific,
+                pitch_rad: pitch_est,
+                ..hover_step()
+            };
+            f.predict(&step, dt).unwrap();
+            window.add(specific, dt);
+            if let Some(mean) = window.take(c.window_s) {
+                if drag {
+                    f.fuse_drag(&c, mean, 0.0, pitch_est);
+                }
+                // About world y at zero heading is pitch.
+                pitch_est += f.take_tilt_error().0[1];
+            }
+        }
+        (
+            (f.state()[ix::VEL] - v_true).abs(),
+            (pitch_est - tilt).abs(),
+        )
+    }
+
+    #[test]
+    fn drag_bounds_the_velocity_error_a_tilt_error_builds() {
+        let (v_with, tilt_with) = run(true);
+        let (v_without, tilt_without) = run(false);
+        assert!(v_without > 1.0, "without drag {v_without}");
+        assert_eq!(tilt_without, 2.0f32.to_radians());
+        // Hovering, a tilt error and an accelerometer bias that cancel it look alike; what is
+        // left of the tilt is taken up by the bias, and the velocity by both (0.42 m/s after
+        // 20 s, against 6.8 without drag).
+        assert!(
+            v_with < 0.6 && v_with < v_without / 5.0,
+            "with drag {v_with}"
+        );
+        assert!(tilt_with < 0.3f32.to_radians(), "with drag {tilt_with}");
+    }
+
+    #[test]
+    fn no_drag_coefficient_means_no_measurement() {
+        let mut f = Ekf::new(EkfConfig::default());
+        let c = DragConfig {
+            drag_per_s: 0.0,
+            ..DragConfig::default()
+        };
+        let before = f;
+        assert_eq!(f.fuse_drag(&c, [0.1, 0.0], 0.0, 0.0), Outcome::Invalid);
+        assert_eq!(f, before);
+    }
+}
