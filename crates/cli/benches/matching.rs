@@ -89,25 +89,31 @@ fn synthetic_pairs(beams: usize) -> Vec<(Scan<N>, Scan<N>)> {
         .collect()
 }
 
-/// Median and 99th percentile of the per-pair best-of-`REPEATS` time, µs.
-fn time_pairs(kind: MatcherKind, pairs: &[(Scan<N>, Scan<N>)]) -> (f64, f64, usize) {
+/// Median and 99th percentile of the per-pair best-of-`REPEATS` time, µs, the failed pairs, and
+/// the mean Gauss-Newton passes per match (what most of the time scales with).
+fn time_pairs(kind: MatcherKind, pairs: &[(Scan<N>, Scan<N>)]) -> (f64, f64, usize, f64) {
     let mut matcher: Box<ScanMatcher<N>> = Box::new(ScanMatcher::new(MatchConfig::with_kind(kind)));
     let mut times = Vec::with_capacity(pairs.len());
     let mut failed = 0;
+    let mut passes = 0usize;
     for (a, b) in pairs {
         let mut best = f64::INFINITY;
         for _ in 0..REPEATS {
             let t0 = Instant::now();
-            let ok =
-                matcher.set_reference(a).is_ok() && matcher.match_scan(b, Pose2::IDENTITY).is_ok();
+            let result = matcher
+                .set_reference(a)
+                .ok()
+                .and_then(|()| matcher.match_scan(b, Pose2::IDENTITY).ok());
             best = best.min(t0.elapsed().as_secs_f64() * 1e6);
-            failed += (!ok) as usize;
+            failed += result.is_none() as usize;
+            passes += result.map_or(0, |r| r.quality.iterations as usize);
         }
         times.push(best);
     }
     times.sort_by(f64::total_cmp);
     let pick = |p: f64| times[((times.len() as f64 * p).ceil() as usize).clamp(1, times.len()) - 1];
-    (pick(0.5), pick(0.99), failed / REPEATS)
+    let mean_passes = passes as f64 / (REPEATS * pairs.len()).max(1) as f64;
+    (pick(0.5), pick(0.99), failed / REPEATS, mean_passes)
 }
 
 fn dump(name: &str, pairs: &[(Scan<N>, Scan<N>)]) -> PathBuf {
@@ -163,13 +169,13 @@ fn main() {
             if !wanted(name, kind) {
                 continue;
             }
-            let (median, p99, failed) = time_pairs(kind, pairs);
+            let (median, p99, failed, passes) = time_pairs(kind, pairs);
             println!(
-                "{name:<18} {:<10} median {median:8.1} us  p99 {p99:8.1} us  failed {failed}/{}",
+                "{name:<18} {:<10} median {median:8.1} us  p99 {p99:8.1} us  failed {failed}/{}  passes {passes:.1}",
                 kind.name(),
                 pairs.len()
             );
-            rows.push(serde_json::json!({"pairs": name, "matcher": kind.name(), "median_us": median, "p99_us": p99, "failed": failed, "file": file}));
+            rows.push(serde_json::json!({"pairs": name, "matcher": kind.name(), "median_us": median, "p99_us": p99, "failed": failed, "passes_mean": passes, "file": file}));
         }
     }
     println!("{}", serde_json::Value::Array(rows));
