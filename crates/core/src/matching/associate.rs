@@ -82,6 +82,7 @@ pub fn associate<M: Metric, const N: usize>(
     let mut stats = PassStats::default();
     let mut hist = [0u16; HIST_BINS];
     let bin_width = gate.gate_m / HIST_BINS as f32;
+    let bins_per_m = 1.0 / bin_width;
     let gate2 = gate.gate_m * gate.gate_m;
     let point_gate2 = cfg.max_correspondence_m * cfg.max_correspondence_m;
     let inv_k2 = 1.0 / (gate.kernel_m * gate.kernel_m);
@@ -124,7 +125,7 @@ pub fn associate<M: Metric, const N: usize>(
         }
         let w = 1.0 / (1.0 + r2 * inv_k2);
         acc.add(p, q, target, normal, w, pose);
-        let bin = ((r.abs() / bin_width) as usize).min(HIST_BINS - 1);
+        let bin = ((r.abs() * bins_per_m) as usize).min(HIST_BINS - 1);
         hist[bin] = hist[bin].saturating_add(1);
         stats.inliers += 1;
         stats.weighted_sq_sum += w * r2;

@@ -5,7 +5,7 @@
 //! correspondence costs a few comparisons in a window instead of a search over the whole scan
 //! (O(N·w), never O(N²)).
 
-use super::fast_math::atan2_approx;
+use super::fast_math::{atan2_approx, sin_cos};
 use super::linalg::sym2_eigen;
 use crate::geom::Vec2;
 use crate::scan::Scan;
@@ -23,7 +23,11 @@ pub struct LineFit {
 impl LineFit {
     const SCALE: f32 = i16::MAX as f32;
     fn line(normal: Vec2) -> Self {
-        let q = |v: f32| libm::roundf(v.clamp(-1.0, 1.0) * Self::SCALE) as i16;
+        // Round half away from zero by hand: libm's roundf is a call per component.
+        let q = |v: f32| {
+            let v = v.clamp(-1.0, 1.0) * Self::SCALE;
+            (v + if v < 0.0 { -0.5 } else { 0.5 }) as i16
+        };
         LineFit {
             nx: q(normal.x),
             ny: q(normal.y),
@@ -93,7 +97,8 @@ impl<const N: usize> PreparedScan<N> {
                 return Err(PrepareError::BeamsNotInAngularOrder { beam: i });
             }
             prev = bearing;
-            self.points[self.len] = beam.point();
+            let (sin, cos) = sin_cos(beam.angle_rad);
+            self.points[self.len] = Vec2::new(beam.range_m * cos, beam.range_m * sin);
             self.bearings[self.len] = beam.angle_rad;
             self.len += 1;
         }
@@ -113,44 +118,35 @@ impl<const N: usize> PreparedScan<N> {
     /// farther than `max_neighbour_m`, a gap). A spatial extent, not a beam count, is what makes
     /// the fit rise above range noise at every beam density; points on clutter or alone get none.
     pub fn fit_lines(&mut self, max_neighbour_m: f32, max_flatness: f32, min_extent_m: f32) {
-        let max2 = max_neighbour_m * max_neighbour_m;
-        let extent2 = min_extent_m * min_extent_m;
+        let limits = FitLimits {
+            max2: max_neighbour_m * max_neighbour_m,
+            extent2: min_extent_m * min_extent_m,
+            max_flatness,
+        };
+        const M: usize = MAX_LINE_NEIGHBOURS;
         for i in 0..self.len {
-            let c = self.points[i];
-            let (mut n, mut sx, mut sy) = (1.0f32, 0.0f32, 0.0f32);
-            let (mut sxx, mut sxy, mut syy) = (0.0f32, 0.0f32, 0.0f32);
-            for side in [-1isize, 1] {
-                for k in 1..=MAX_LINE_NEIGHBOURS as isize {
-                    let Some(j) = self.neighbour(i, side * k) else {
-                        break;
-                    };
-                    let d = self.points[j] - c;
-                    let d2 = d.norm_squared();
-                    if d2 > max2 {
-                        break;
+            // Away from the ends the window is a plain slice; only the few points near an end
+            // need the wrap-around (or the cut) gathered by hand.
+            let interior = (i >= M && i + M < self.len)
+                .then(|| <&[Vec2; WINDOW]>::try_from(&self.points[i - M..=i + M]).ok())
+                .flatten();
+            self.lines[i] = match interior {
+                Some(window) => fit_window(window, M, M, &limits),
+                None => {
+                    let mut window = [self.points[i]; WINDOW];
+                    let mut reach = [0usize; 2];
+                    for (side, sign) in [(0, -1isize), (1, 1)] {
+                        for k in 1..=M {
+                            let Some(j) = self.neighbour(i, sign * k as isize) else {
+                                break;
+                            };
+                            window[if side == 0 { M - k } else { M + k }] = self.points[j];
+                            reach[side] = k;
+                        }
                     }
-                    n += 1.0;
-                    sx += d.x;
-                    sy += d.y;
-                    sxx += d.x * d.x;
-                    sxy += d.x * d.y;
-                    syy += d.y * d.y;
-                    // Two neighbours a side at least, so a scan's end points still get a line.
-                    if d2 >= extent2 && k >= 2 {
-                        break;
-                    }
+                    fit_window(&window, reach[0], reach[1], &limits)
                 }
-            }
-            self.lines[i] = LineFit::default();
-            if n < 3.0 {
-                continue;
-            }
-            let (mx, my) = (sx / n, sy / n);
-            let (cxx, cxy, cyy) = (sxx / n - mx * mx, sxy / n - mx * my, syy / n - my * my);
-            let (hi, lo, normal) = sym2_eigen(cxx, cxy, cyy);
-            if hi > 0.0 && lo <= max_flatness * hi {
-                self.lines[i] = LineFit::line(normal);
-            }
+            };
         }
         self.has_lines = true;
     }
@@ -199,6 +195,36 @@ impl<const N: usize> PreparedScan<N> {
     /// `hint` (queries come in angular order, so this is usually a step or two). `None` when `q`
     /// lies outside the field of view of a scan that is not a full circle.
     pub fn project(&self, q: Vec2, hint: usize) -> Option<usize> {
+        self.walk(q, hint)
+            .or_else(|| self.project_by_bearing(q, hint))
+    }
+
+    /// [`Self::project`] without any trigonometry, for a query near the hint: a reference
+    /// point's bearing is below that of `q` exactly when `q` is counter-clockwise of it (their
+    /// cross product is positive) while the two are less than a half turn apart. `None` (ask
+    /// [`Self::project_by_bearing`]) when the walk gets long, reaches an end of the scan, or ends
+    /// between two points that are not both within a quarter turn of `q`.
+    fn walk(&self, q: Vec2, hint: usize) -> Option<usize> {
+        let p = &self.points[..self.len];
+        let mut k = hint;
+        for _ in 0..8 {
+            let (Some(&before), Some(&at)) = (p.get(k.wrapping_sub(1)), p.get(k)) else {
+                return None;
+            };
+            if at.cross(q) > 0.0 {
+                k += 1;
+            } else if before.cross(q) <= 0.0 {
+                k -= 1;
+            } else {
+                return (at.dot(q) > 0.0 && before.dot(q) > 0.0).then_some(k);
+            }
+        }
+        None
+    }
+
+    /// [`Self::project`] from the bearing of `q` (an approximate atan2): a short walk from the
+    /// hint, or bisection.
+    fn project_by_bearing(&self, q: Vec2, hint: usize) -> Option<usize> {
         if self.len == 0 {
             return None;
         }
@@ -263,12 +289,61 @@ impl<const N: usize> PreparedScan<N> {
             }
         };
         scan(lo, hi);
-        if self.full_circle {
+        if self.full_circle && (lo < 0 || hi > n) {
             // The parts of the window that wrap past either end of the ring.
             scan(n + lo, n);
             scan(0, hi - n);
         }
         (best.0 != usize::MAX).then_some(best)
+    }
+}
+
+/// Points in a line fit's window: the centre and up to `MAX_LINE_NEIGHBOURS` a side.
+const WINDOW: usize = 2 * MAX_LINE_NEIGHBOURS + 1;
+
+/// When a neighbourhood counts as a line (squared distances, m²).
+struct FitLimits {
+    max2: f32,
+    extent2: f32,
+    max_flatness: f32,
+}
+
+/// The line through the centre of `window` fitted to the neighbours it reaches: at most
+/// `below` and `above` a side, stopping at a gap or once the extent is spanned.
+fn fit_window(window: &[Vec2; WINDOW], below: usize, above: usize, lim: &FitLimits) -> LineFit {
+    const M: usize = MAX_LINE_NEIGHBOURS;
+    let c = window[M];
+    let (mut n, mut sx, mut sy) = (1.0f32, 0.0f32, 0.0f32);
+    let (mut sxx, mut sxy, mut syy) = (0.0f32, 0.0f32, 0.0f32);
+    for (side, reach) in [(0, below.min(M)), (1, above.min(M))] {
+        for k in 1..=reach {
+            let d = window[if side == 0 { M - k } else { M + k }] - c;
+            let d2 = d.norm_squared();
+            if d2 > lim.max2 {
+                break;
+            }
+            n += 1.0;
+            sx += d.x;
+            sy += d.y;
+            sxx += d.x * d.x;
+            sxy += d.x * d.y;
+            syy += d.y * d.y;
+            // Two neighbours a side at least, so a scan's end points still get a line.
+            if d2 >= lim.extent2 && k >= 2 {
+                break;
+            }
+        }
+    }
+    if n < 3.0 {
+        return LineFit::default();
+    }
+    let (mx, my) = (sx / n, sy / n);
+    let (cxx, cxy, cyy) = (sxx / n - mx * mx, sxy / n - mx * my, syy / n - my * my);
+    let (hi, lo, normal) = sym2_eigen(cxx, cxy, cyy);
+    if hi > 0.0 && lo <= lim.max_flatness * hi {
+        LineFit::line(normal)
+    } else {
+        LineFit::default()
     }
 }
 
