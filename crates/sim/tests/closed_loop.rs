@@ -120,19 +120,45 @@ fn holds_over_the_start_through_a_push_and_lands() {
     assert_eq!(modes, vec![Disarmed, Takeoff, Hold, Land, Disarmed]);
 }
 
+/// Issue 4's lidar-failure scenario over twenty seeds: the lidar stops 10 s into the flight,
+/// "lidar lost" is raised, the vehicle holds on the IMU for a while, then lands. The room's walls
+/// are 1 m from the start (0.65 m from the vehicle's rim), so the IMU-only flight must stay
+/// close: it used to hit a wall on every seed (the IMU-only estimate strayed 0.4-2.3 m). Seeds
+/// 300-319 were not used in tuning (mean 0.20 m, worst 0.42 m when this was written).
 #[test]
-fn lidar_failure_holds_then_lands() {
-    let mut c = room(12);
-    c.max_duration_s = 25.0;
-    let (status, log) = fly(&c, vec![(0.5, true)], Some(10.0));
-    println!("modes {:?}", log.onboard.modes);
-    assert_eq!(status, Status::Completed);
-    assert_eq!(log.onboard.failsafe, Some(FailsafeReason::LidarLost));
-    assert_eq!(log.onboard.final_mode(), FlightMode::Disarmed);
+fn twenty_seeds_of_lidar_failure_land_near_where_the_lidar_stopped() {
+    const DIES_AT_S: f64 = 10.0;
+    let (mut failures, mut strays) = (Vec::new(), Vec::new());
+    for seed in 300..320 {
+        let mut c = room(seed);
+        c.max_duration_s = 15.0;
+        let (status, log) = fly(&c, vec![(0.5, true)], Some(DIES_AT_S));
+        let at = |t: f64| log.truth.iter().find(|s| s.t_s >= t).or(log.truth.last());
+        let (Some(stop), Some(end)) = (at(DIES_AT_S), log.truth.last()) else {
+            failures.push((seed, "no truth".to_string()));
+            continue;
+        };
+        let stray = (end.position.x - stop.position.x).hypot(end.position.y - stop.position.y);
+        strays.push(stray);
+        let landed = log.onboard.final_mode() == FlightMode::Disarmed;
+        let reason = log.onboard.failsafe == Some(FailsafeReason::LidarLost);
+        if status != Status::Completed || !landed || !reason || stray > 0.6 {
+            failures.push((
+                seed,
+                format!("{status:?} landed {landed} stray {stray:.2} m"),
+            ));
+        }
+    }
+    let mean = strays.iter().sum::<f64>() / strays.len().max(1) as f64;
+    let worst = strays.iter().copied().fold(0.0, f64::max);
+    println!("landed {mean:.3} m from where the lidar stopped on average, worst {worst:.3} m");
+    assert!(failures.is_empty(), "{failures:?}");
+    assert!(mean < 0.3, "mean stray {mean}");
 }
 
-/// Twenty seeds of the hold with seed 000's push: none may crash, and the hold error before
-/// the push must average within issue 4's 5 cm.
+/// A hundred seeds of the hold with seed 000's push: none may crash, and the hold error before
+/// the push must average well within issue 4's 5 cm (1.65 cm when this was written; 4.5 cm
+/// before the tilt filter's alignment and gyro-bias fixes).
 #[test]
 fn a_hundred_seeds_of_hold_and_push_do_not_crash() {
     let (mut crashes, mut rms_sum, mut flown) = (Vec::new(), 0.0, 0);
@@ -150,5 +176,5 @@ fn a_hundred_seeds_of_hold_and_push_do_not_crash() {
     let mean_rms = rms_sum / flown.max(1) as f64;
     println!("mean hold rms over {flown} seeds: {mean_rms:.4} m");
     assert!(crashes.is_empty(), "{crashes:?}");
-    assert!(mean_rms < 0.05, "{mean_rms}");
+    assert!(mean_rms < 0.03, "{mean_rms}");
 }
