@@ -33,6 +33,7 @@ impl Rng {
         Self::new(seed ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03))
     }
 
+    #[inline]
     pub fn next_u64(&mut self) -> u64 {
         let s = &mut self.s;
         let result = s[0].wrapping_add(s[3]).rotate_left(23).wrapping_add(s[0]);
@@ -47,6 +48,7 @@ impl Rng {
     }
 
     /// Uniform in [0, 1) with 53 random bits.
+    #[inline]
     pub fn uniform(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
@@ -57,6 +59,7 @@ impl Rng {
     }
 
     /// Standard normal.
+    #[inline]
     pub fn gauss(&mut self) -> f64 {
         crate::ziggurat::standard_normal(self)
     }

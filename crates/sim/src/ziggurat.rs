@@ -51,17 +51,33 @@ fn tables() -> &'static Tables {
     })
 }
 
-/// One standard normal draw from `rng`.
+/// One standard normal draw from `rng`. The common case (a point inside its layer's inner
+/// rectangle) is small enough to inline into every caller; the rest is out of line.
+#[inline]
 pub fn standard_normal(rng: &mut Rng) -> f64 {
     let t = tables();
+    let (layer, u) = layer_and_offset(rng);
+    if u.abs() < t.inner[layer] {
+        return u * t.edge[layer];
+    }
+    outside_inner(rng, t, layer, u)
+}
+
+/// The low 7 bits of one word pick the layer, the top 53 give a signed uniform in [-1, 1).
+#[inline]
+fn layer_and_offset(rng: &mut Rng) -> (usize, f64) {
+    let bits = rng.next_u64();
+    let layer = (bits & (LAYERS as u64 - 1)) as usize;
+    let u = (bits >> 11) as f64 * (1.0 / (1u64 << 52) as f64) - 1.0;
+    (layer, u)
+}
+
+/// A draw that fell outside its layer's inner rectangle: the tail, or the wedge test, drawing
+/// afresh after a rejection.
+#[cold]
+#[inline(never)]
+fn outside_inner(rng: &mut Rng, t: &Tables, mut layer: usize, mut u: f64) -> f64 {
     loop {
-        let bits = rng.next_u64();
-        // The low 7 bits pick the layer, the top 53 give a signed uniform in [-1, 1).
-        let layer = (bits & (LAYERS as u64 - 1)) as usize;
-        let u = (bits >> 11) as f64 * (1.0 / (1u64 << 52) as f64) - 1.0;
-        if u.abs() < t.inner[layer] {
-            return u * t.edge[layer];
-        }
         if layer == 0 {
             return tail(rng, u.signum());
         }
@@ -69,6 +85,10 @@ pub fn standard_normal(rng: &mut Rng) -> f64 {
         let y = t.density[layer] + rng.uniform() * (t.density[layer + 1] - t.density[layer]);
         if y < density(x) {
             return x;
+        }
+        (layer, u) = layer_and_offset(rng);
+        if u.abs() < t.inner[layer] {
+            return u * t.edge[layer];
         }
     }
 }

@@ -44,12 +44,23 @@ const BIAS_EVERY: u64 = 10;
 /// An IMU in flight.
 #[derive(Clone, Debug)]
 pub struct Imu {
-    params: ImuParams,
+    /// Per-sample standard deviations, worked out once: sample period, white noise of the gyro
+    /// and accelerometer, and one bias-walk step of each.
+    dt_s: f64,
+    sigma: Sigmas,
     rng: Rng,
     gyro_bias: Vec3,
     accel_bias: Vec3,
     next_s: f64,
     count: u64,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Sigmas {
+    gyro: f64,
+    accel: f64,
+    gyro_walk: f64,
+    accel_walk: f64,
 }
 
 fn gauss3(rng: &mut Rng, sigma: f64) -> Vec3 {
@@ -60,8 +71,20 @@ impl Imu {
     pub fn new(params: ImuParams, mut rng: Rng) -> Self {
         let gyro_bias = gauss3(&mut rng, params.gyro_initial_bias);
         let accel_bias = gauss3(&mut rng, params.accel_initial_bias);
+        let dt_s = 1.0 / params.rate_hz;
+        let root_rate = params.rate_hz.sqrt();
+        // The biases walk in steps of BIAS_EVERY samples: the same variance growth (σ² t) for a
+        // sixth of the random draws.
+        let walk_step = (BIAS_EVERY as f64 * dt_s).sqrt();
+        let sigma = Sigmas {
+            gyro: params.gyro_noise_density * root_rate,
+            accel: params.accel_noise_density * root_rate,
+            gyro_walk: params.gyro_bias_walk * walk_step,
+            accel_walk: params.accel_bias_walk * walk_step,
+        };
         Self {
-            params,
+            dt_s,
+            sigma,
             rng,
             gyro_bias,
             accel_bias,
@@ -76,22 +99,15 @@ impl Imu {
         if t_s < self.next_s {
             return None;
         }
-        let p = &self.params;
-        let dt = 1.0 / p.rate_hz;
-        self.next_s += dt;
-        let root_rate = p.rate_hz.sqrt();
-        // The biases walk in steps of BIAS_EVERY samples: the same variance growth (σ² t) for a
-        // sixth of the random draws.
+        let sigma = self.sigma;
+        self.next_s += self.dt_s;
         self.count += 1;
         if self.count.is_multiple_of(BIAS_EVERY) {
-            let step = (BIAS_EVERY as f64 * dt).sqrt();
-            self.gyro_bias += gauss3(&mut self.rng, p.gyro_bias_walk * step);
-            self.accel_bias += gauss3(&mut self.rng, p.accel_bias_walk * step);
+            self.gyro_bias += gauss3(&mut self.rng, sigma.gyro_walk);
+            self.accel_bias += gauss3(&mut self.rng, sigma.accel_walk);
         }
-        let g = rate + self.gyro_bias + gauss3(&mut self.rng, p.gyro_noise_density * root_rate);
-        let a = specific_force
-            + self.accel_bias
-            + gauss3(&mut self.rng, p.accel_noise_density * root_rate);
+        let g = rate + self.gyro_bias + gauss3(&mut self.rng, sigma.gyro);
+        let a = specific_force + self.accel_bias + gauss3(&mut self.rng, sigma.accel);
         Some(ImuSample {
             t_s,
             gyro_rad_s: [g.x as f32, g.y as f32, g.z as f32],
