@@ -46,10 +46,12 @@ pub struct EnergyTally {
 }
 
 impl EnergyTally {
+    /// Adds `dt_s` at power `s` (one division for the three parts: this runs every step).
     pub fn add(&mut self, s: &PowerSplit, dt_s: f64) {
-        self.motors_wh += s.motors_w * dt_s / 3600.0;
-        self.escs_wh += s.escs_w * dt_s / 3600.0;
-        self.avionics_wh += s.avionics_w * dt_s / 3600.0;
+        let hours = dt_s / 3600.0;
+        self.motors_wh += s.motors_w * hours;
+        self.escs_wh += s.escs_w * hours;
+        self.avionics_wh += s.avionics_w * hours;
     }
 
     pub fn total_wh(&self) -> f64 {
