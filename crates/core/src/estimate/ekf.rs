@@ -236,19 +236,42 @@ impl Ekf {
         }
     }
 
-    /// Makes the current (x, y, yaw) the reference pose of the scan matcher: the clone takes the
-    /// values and all the correlations of the live states.
-    pub fn clone_reference(&mut self) {
-        let live = [ix::POS, ix::POS + 1, ix::YAW];
-        for (k, &src) in live.iter().enumerate() {
-            self.x[ix::CLONE + k] = self.x[src];
+    /// Makes (x, y, yaw) as they were `latency_s` ago (position taken back along the velocity)
+    /// the reference pose of the scan matcher: the clone takes the values and all the
+    /// correlations of those combinations of live states.
+    pub fn clone_reference(&mut self, latency_s: f32) {
+        let l = latency_s;
+        // Clone k = live k - l * (velocity k), for x and y; yaw as it is.
+        let live = [
+            (ix::POS, Some(ix::VEL)),
+            (ix::POS + 1, Some(ix::VEL + 1)),
+            (ix::YAW, None),
+        ];
+        let combine = |x: &State, p: &Covariance, k: usize, row: bool| {
+            let (src, vel) = live[k];
+            let mut v = if row {
+                p.row(src).transpose().into_owned()
+            } else {
+                p.column(src).into_owned()
+            };
+            if let Some(vi) = vel {
+                let d = if row {
+                    p.row(vi).transpose().into_owned()
+                } else {
+                    p.column(vi).into_owned()
+                };
+                v -= d * l;
+            }
+            let value = x[src] - vel.map_or(0.0, |vi| l * x[vi]);
+            (value, v)
+        };
+        for k in 0..3 {
+            let (value, row) = combine(&self.x, &self.p, k, true);
+            self.x[ix::CLONE + k] = value;
+            self.p.set_row(ix::CLONE + k, &row.transpose());
         }
-        for (k, &src) in live.iter().enumerate() {
-            let row = self.p.row(src).into_owned();
-            self.p.set_row(ix::CLONE + k, &row);
-        }
-        for (k, &src) in live.iter().enumerate() {
-            let col = self.p.column(src).into_owned();
+        for k in 0..3 {
+            let (_, col) = combine(&self.x, &self.p, k, false);
             self.p.set_column(ix::CLONE + k, &col);
         }
         self.has_reference = true;
@@ -414,7 +437,7 @@ mod tests {
         f.x[ix::YAW] = 0.3;
         f.p[(ix::POS, ix::VEL)] = 1e-3;
         f.p[(ix::VEL, ix::POS)] = 1e-3;
-        f.clone_reference();
+        f.clone_reference(0.0);
         assert_eq!(f.x[ix::CLONE], 1.5);
         assert_eq!(f.x[ix::CLONE + 2], 0.3);
         assert_eq!(f.p[(ix::CLONE, ix::VEL)], 1e-3);

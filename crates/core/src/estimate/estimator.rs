@@ -115,10 +115,11 @@ impl Estimator {
         Some(outcome)
     }
 
-    /// Fuses a scan-matcher result; after a run of rejections the horizontal pose and velocity
-    /// are reopened so the matcher can pull the filter back (a pose jump after an outage).
-    pub fn fuse_scan_match(&mut self, m: &ScanMatchDelta) -> Outcome {
-        let outcome = self.ekf.fuse_scan_match(m);
+    /// Fuses a scan-matcher result whose pose belongs `latency_s` before now; after a run of
+    /// rejections the horizontal pose and velocity are reopened so the matcher can pull the
+    /// filter back (a pose jump after an outage).
+    pub fn fuse_scan_match(&mut self, m: &ScanMatchDelta, latency_s: f32) -> Outcome {
+        let outcome = self.ekf.fuse_scan_match(m, latency_s);
         let limit = self.config.ekf.reset_after_rejections;
         if self.counters.scan_match.record_gated(outcome, limit) {
             let [sp, _, sv, sy] = self.config.ekf.reopen_std;
@@ -274,10 +275,13 @@ mod tests {
         let (vx, vy, yaw) = (0.2f32, -0.1f32, 0.0f32);
         let dt = 1.0 / IMU_HZ;
         let mut reference = Pose2::new(0.0, 0.0, yaw);
-        est.fuse_scan_match(&ScanMatchDelta {
-            status: ScanMatchStatus::ReferenceOnly,
-            ..scan(&mut rng, 0.0, reference, reference)
-        });
+        est.fuse_scan_match(
+            &ScanMatchDelta {
+                status: ScanMatchStatus::ReferenceOnly,
+                ..scan(&mut rng, 0.0, reference, reference)
+            },
+            0.0,
+        );
         let steps = (20.0 * IMU_HZ) as usize;
         let mut truth = reference;
         for k in 1..=steps {
@@ -295,7 +299,7 @@ mod tests {
             assert!(est.predict(&imu, dt));
             if k % 100 == 0 {
                 let m = scan(&mut rng, t as f64, truth, reference);
-                est.fuse_scan_match(&m);
+                est.fuse_scan_match(&m, 0.0);
                 reference = truth;
             }
         }

@@ -169,7 +169,10 @@ impl Autopilot {
             self.estimator.fuse_sonar(sonar);
         }
         let scan_accepted = inputs.scan_match.is_some_and(|m| {
-            let outcome = self.estimator.fuse_scan_match(&m);
+            // The match is handed over when its revolution completes; its pose is that of
+            // mid-revolution, half-way from its first beam (`t_s`) to now.
+            let latency_s = (0.5 * (inputs.t_s - m.t_s)) as f32;
+            let outcome = self.estimator.fuse_scan_match(&m, latency_s);
             m.status == ScanMatchStatus::Matched && outcome == Outcome::Accepted
         });
         // Disarmed means on the floor; so does an estimate below the floor, which happens when a
