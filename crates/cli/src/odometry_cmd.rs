@@ -4,6 +4,10 @@ use crate::log_args::LogArgs;
 use crate::plot::plot_trajectory;
 use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::Args;
+use plumbline_core::geom::Pose2;
+use plumbline_core::matching::local_map::{
+    LineMap, LineMapConfig, MapCell, MapUse, MappedOdometry, RefineConfig,
+};
 use plumbline_core::matching::{
     LidarOdometry, MatchConfig, MatcherKind, OdometryConfig, OdometryStep,
 };
@@ -39,6 +43,19 @@ pub struct OdometryArgs {
     /// New keyframe after this much turning, degrees.
     #[arg(long, default_value_t = OdometryConfig::default().keyframe_angle_rad.to_degrees())]
     pub keyframe_angle_deg: f32,
+    /// Do not align keyframes with the local map of the walls seen so far: plain
+    /// scan-to-keyframe odometry, which drifts more (BENCHMARKS.md).
+    #[arg(long)]
+    pub no_local_map: bool,
+    /// Local map cell edge, m.
+    #[arg(long, default_value_t = LineMapConfig::default().cell_m)]
+    pub map_cell: f32,
+    /// Local map width, m (rounded to whole cells; the map rolls along with the vehicle).
+    #[arg(long, default_value_t = 64.0)]
+    pub map_size: f32,
+    /// Weight of the scan match against the map when aligning a keyframe.
+    #[arg(long, default_value_t = RefineConfig::default().matcher_weight)]
+    pub map_matcher_weight: f32,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Print the summary as one JSON object.
@@ -56,7 +73,29 @@ pub fn run(args: OdometryArgs) -> CliResult {
         keyframe_angle_rad: args.keyframe_angle_deg.to_radians(),
         ..OdometryConfig::default()
     };
-    let mut odometry: Box<LidarOdometry<MAX_BEAMS>> = Box::new(LidarOdometry::new(config));
+    let map_config = LineMapConfig {
+        cell_m: args.map_cell,
+        ..LineMapConfig::default()
+    };
+    let refine = RefineConfig {
+        matcher_weight: args.map_matcher_weight,
+        ..RefineConfig::default()
+    };
+    let use_map = !args.no_local_map;
+    let side = if use_map {
+        map_side(args.map_size, args.map_cell, args.map_matcher_weight)?
+    } else {
+        0
+    };
+    let mut cells = vec![MapCell::default(); side * side];
+    let mut odometry = if use_map {
+        let map = LineMap::new(&mut cells, map_config)
+            .map_err(|e| CliError(format!("local map: {e:?}")))?;
+        Odometer::Mapped(Box::new(MappedOdometry::new(config, map, refine)))
+    } else {
+        Odometer::Plain(Box::new(LidarOdometry::new(config)))
+    };
+    let (mut map_refined, mut map_refused) = (0usize, 0usize);
     let bar = progress(log.scans.len() as u64, "odometry");
     let mut times_us = Vec::with_capacity(log.scans.len());
     let mut trajectory = Vec::with_capacity(log.scans.len());
@@ -80,8 +119,13 @@ pub fn run(args: OdometryArgs) -> CliResult {
         };
         previous_odom = rec.odom;
         let start = Instant::now();
-        let step = odometry.update(&scan, prior);
+        let (step, map_use) = odometry.update(&scan, prior);
         let elapsed = start.elapsed();
+        match map_use {
+            Some(MapUse::Refined(_)) => map_refined += 1,
+            Some(MapUse::Refused(_)) => map_refused += 1,
+            _ => {}
+        }
         match step {
             OdometryStep::Started => keyframes += 1,
             OdometryStep::Matched {
@@ -135,11 +179,66 @@ pub fn run(args: OdometryArgs) -> CliResult {
         "recovered_matches": recovered,
         "mean_iterations": if times_us.is_empty() { 0.0 } else { iterations as f64 / times_us.len() as f64 },
         "odom_prior": args.odom_prior,
+        "local_map": use_map,
+        "map_aligned_keyframes": map_refined,
+        "map_refused_keyframes": map_refused,
         "non_monotonic_scans": log.stats.non_monotonic_scans,
         "bad_lines": log.stats.bad_lines,
     });
     print_summary(&summary, args.json);
     Ok(())
+}
+
+/// Cells per side of the local map, after checking the map options make sense.
+fn map_side(size_m: f32, cell_m: f32, matcher_weight: f32) -> Result<usize, CliError> {
+    /// 4 million cells, about 200 MB: past this a typo is likelier than a wish.
+    const MAX_SIDE: f32 = 2048.0;
+    if !(cell_m.is_finite() && cell_m > 0.0) {
+        return Err(CliError(format!(
+            "--map-cell {cell_m}: must be a positive length in m"
+        )));
+    }
+    let side = (size_m / cell_m).ceil();
+    if !(size_m.is_finite() && size_m > 0.0 && side <= MAX_SIDE) {
+        return Err(CliError(format!(
+            "--map-size {size_m}: must be positive and at most {MAX_SIDE} cells of {cell_m} m"
+        )));
+    }
+    if !(matcher_weight.is_finite() && matcher_weight >= 0.0) {
+        return Err(CliError(format!(
+            "--map-matcher-weight {matcher_weight}: must be zero or positive"
+        )));
+    }
+    Ok(side as usize)
+}
+
+/// Scan-to-keyframe odometry, with or without the local map.
+enum Odometer<'m> {
+    Plain(Box<LidarOdometry<MAX_BEAMS>>),
+    Mapped(Box<MappedOdometry<'m, MAX_BEAMS>>),
+}
+
+impl Odometer<'_> {
+    fn update(
+        &mut self,
+        scan: &Scan<MAX_BEAMS>,
+        prior: Option<Pose2>,
+    ) -> (OdometryStep, Option<MapUse>) {
+        match self {
+            Odometer::Plain(o) => (o.update(scan, prior), None),
+            Odometer::Mapped(o) => {
+                let s = o.update(scan, prior);
+                (s.step, Some(s.map))
+            }
+        }
+    }
+
+    fn pose(&self) -> Pose2 {
+        match self {
+            Odometer::Plain(o) => o.pose(),
+            Odometer::Mapped(o) => o.pose(),
+        }
+    }
 }
 
 /// Nearest-rank percentile of sorted values; 0 for none.

@@ -5,6 +5,8 @@ mod cells;
 mod mapped;
 mod refine;
 
+/// The prior's information matrix type of [`refine`].
+pub use crate::matching::linalg::Sym3;
 pub use cells::{CellLine, LineMap, LineMapConfig, LineMapError, MapCell};
 pub use mapped::{MapUse, MappedOdometry, MappedStep};
 pub use refine::{refine, RefineConfig, RefineRefusal, Refined};

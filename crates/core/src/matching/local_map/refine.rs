@@ -9,7 +9,7 @@
 
 use super::cells::LineMap;
 use crate::geom::{normalize_angle, Pose2, Vec2};
-use crate::matching::linalg::Sym3;
+use crate::matching::linalg::{sym2_eigen, Sym3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RefineConfig {
@@ -30,6 +30,9 @@ pub struct RefineConfig {
     /// A result farther than this from the guess is refused as a wrong alignment, m and rad.
     pub max_shift_m: f32,
     pub max_turn_rad: f32,
+    /// Least over most translational information of the map below which the weak direction is
+    /// held at the guess (the scan matcher's degenerate-direction test uses the same ratio).
+    pub min_conditioning: f32,
     /// Scale on the scan matcher's information when its pose is the prior. Its covariance
     /// assumes independent point errors and is far too confident; at 1 the map could barely
     /// move a keyframe, at 0.001 and below the map alone decides and wrong alignments creep in
@@ -50,6 +53,7 @@ impl Default for RefineConfig {
             converged_rad: 1e-4,
             max_shift_m: 0.3,
             max_turn_rad: 0.1,
+            min_conditioning: 0.02,
             matcher_weight: 0.01,
         }
     }
@@ -91,13 +95,7 @@ pub fn refine(
     let mut iterations = 0u8;
     while iterations < config.max_iterations {
         iterations += 1;
-        let (mut h, mut g) = (prior_information, [0.0f32; 3]);
-        let offset = [
-            pose.x - guess.x,
-            pose.y - guess.y,
-            normalize_angle(pose.theta - guess.theta),
-        ];
-        let pulled = prior_information.mul(offset);
+        let (mut h, mut g) = (Sym3::default(), [0.0f32; 3]);
         matched = 0;
         let (s, c) = (libm::sinf(pose.theta), libm::cosf(pose.theta));
         for &p in points {
@@ -123,6 +121,17 @@ pub fn refine(
         if matched < needed {
             return Err(RefineRefusal::TooFewMatched { matched, needed });
         }
+        let prior = sum(
+            &prior_information,
+            &pin_unobserved(&h, config.min_conditioning),
+        );
+        let offset = [
+            pose.x - guess.x,
+            pose.y - guess.y,
+            normalize_angle(pose.theta - guess.theta),
+        ];
+        let pulled = prior.mul(offset);
+        let h = sum(&h, &prior);
         let rhs = [
             -(g[0] + pulled[0]),
             -(g[1] + pulled[1]),
@@ -145,6 +154,34 @@ pub fn refine(
         matched,
         iterations,
     })
+}
+
+/// Where the map's walls leave a translation direction nearly free (a corridor's axis), noisy
+/// cell normals would still pull along it; a prior as strong as the best-constrained direction
+/// holds the guess there instead, the way the scan matcher's own degenerate direction is held.
+fn pin_unobserved(map_information: &Sym3, min_conditioning: f32) -> Sym3 {
+    let (a, b, c) = map_information.translation_schur();
+    let (hi, lo, v) = sym2_eigen(a, b, c);
+    if hi <= 0.0 || lo >= min_conditioning * hi {
+        return Sym3::default();
+    }
+    Sym3 {
+        xx: hi * v.x * v.x,
+        xy: hi * v.x * v.y,
+        yy: hi * v.y * v.y,
+        ..Sym3::default()
+    }
+}
+
+fn sum(a: &Sym3, b: &Sym3) -> Sym3 {
+    Sym3 {
+        xx: a.xx + b.xx,
+        xy: a.xy + b.xy,
+        xt: a.xt + b.xt,
+        yy: a.yy + b.yy,
+        yt: a.yt + b.yt,
+        tt: a.tt + b.tt,
+    }
 }
 
 /// The signed distance from `w` to the nearest map line around it, within `gate_m`.
