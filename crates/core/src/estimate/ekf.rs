@@ -323,8 +323,10 @@ impl Ekf {
             k.row_mut(i).fill(0.0);
         }
         self.x += k * residual;
-        let ikh = Covariance::identity() - k * h;
-        self.p = ikh * self.p * ikh.transpose() + k * r * k.transpose();
+        // Joseph form (I - KH) P (I - KH)^T + K R K^T, multiplied out through the N x M factors
+        // (B = P - K (H P), then B - (B H^T) K^T): the same products without the N x N ones.
+        let b = self.p - k * pht.transpose();
+        self.p = b - (b * h.transpose()) * k.transpose() + k * r * k.transpose();
         self.p = (self.p + self.p.transpose()) * 0.5;
         self.x[ix::YAW] = crate::geom::normalize_angle(self.x[ix::YAW]);
         Outcome::Accepted
