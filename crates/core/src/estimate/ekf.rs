@@ -286,18 +286,21 @@ impl Ekf {
         h: SMatrix<f32, M, N>,
         r: SMatrix<f32, M, M>,
     ) -> Outcome {
-        self.update_considering(residual, h, r, &[])
+        let gate = self.config.gate_nis[(M - 1).min(2)];
+        self.update_considering(residual, h, r, &[], gate)
     }
 
     /// [`Self::update`] that leaves the states in `consider` alone (their gain rows are zero;
-    /// the Schmidt-Kalman "consider" update). The Joseph form keeps the covariance right for any
-    /// gain, so their variances and correlations still account for the measurement.
+    /// the Schmidt-Kalman "consider" update), with its own innovation gate. The Joseph form
+    /// keeps the covariance right for any gain, so their variances and correlations still
+    /// account for the measurement.
     pub fn update_considering<const M: usize>(
         &mut self,
         residual: SVector<f32, M>,
         h: SMatrix<f32, M, N>,
         r: SMatrix<f32, M, M>,
         consider: &[usize],
+        gate_nis: f32,
     ) -> Outcome {
         if !(residual.iter().all(|v| v.is_finite())
             && h.iter().all(|v| v.is_finite())
@@ -311,11 +314,10 @@ impl Ekf {
             return Outcome::Invalid;
         };
         let nis = residual.dot(&chol.solve(&residual));
-        let gate = self.config.gate_nis[(M - 1).min(2)];
         if !nis.is_finite() {
             return Outcome::Invalid;
         }
-        if nis > gate {
+        if nis > gate_nis {
             return Outcome::Rejected;
         }
         let mut k = pht * chol.inverse();
@@ -403,7 +405,7 @@ mod tests {
         let mut h = SMatrix::<f32, 1, N>::zeros();
         h[(0, ix::VEL)] = 1.0;
         let r = SMatrix::<f32, 1, 1>::new(0.0025);
-        let out = f.update_considering(SVector::<f32, 1>::new(0.1), h, r, &[ix::POS]);
+        let out = f.update_considering(SVector::<f32, 1>::new(0.1), h, r, &[ix::POS], 8.81);
         assert_eq!(out, Outcome::Accepted);
         assert!(f.x[ix::VEL] > 0.04, "{}", f.x[ix::VEL]);
         assert_eq!(
