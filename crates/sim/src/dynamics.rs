@@ -215,8 +215,9 @@ impl Dynamics {
         }
     }
 
-    /// One step: the motors in closed form, the body by classical RK4 (the quaternion is
-    /// renormalised afterwards). Commands are clamped to 0..1 here, once.
+    /// One step: the motors in closed form, the body by classical RK4. The quaternion is
+    /// renormalised afterwards by [`Quat::renormalized`] (one step drifts it by far less than
+    /// 1e-8). Commands are clamped to 0..1 here, once.
     pub fn step(&self, s: &BodyState, f: &Forcing) -> BodyState {
         let f = &Forcing {
             command: f.command.map(|c| c.clamp(0.0, 1.0)),
@@ -246,7 +247,7 @@ impl Dynamics {
         BodyState {
             position: n.position,
             velocity: n.velocity,
-            attitude: n.attitude.normalized(),
+            attitude: n.attitude.renormalized(),
             rate: n.rate,
             motor: end.motor,
             rotor_speed: end.speed,
