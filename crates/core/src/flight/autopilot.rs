@@ -182,14 +182,18 @@ impl Autopilot {
         if self.mode == FlightMode::Disarmed || below_floor {
             self.estimator.fuse_at_rest();
         }
-        // The drag measurement holds only in the air: on the floor the accelerometer feels the
-        // floor's slope and friction.
+        // The drag measurement holds only in the air (on the floor the accelerometer feels the
+        // floor's slope and friction), and after a lidar loss only if configured to: a draught
+        // then reads as ground velocity (`DragConfig::without_lidar`).
         let flying = matches!(
             self.mode,
             FlightMode::Takeoff | FlightMode::Hold | FlightMode::Land | FlightMode::Manual
         ) && self.estimator.ekf().state()[ix::POS + 2]
             > self.config.landing.ground_height_m;
-        self.estimator.fuse_drag(flying);
+        let lidar_lost = self.supervisor.failsafe() == Some(FailsafeReason::LidarLost);
+        let drag_without_lidar = self.config.estimator.drag.without_lidar;
+        self.estimator
+            .fuse_drag(flying && (!lidar_lost || drag_without_lidar));
         let estimate = self.estimator.state();
         let rates = self
             .estimator
