@@ -77,7 +77,7 @@ pub fn associate<M: Metric, const N: usize>(
     gate: &PassGate,
     cfg: &MatchConfig,
     acc: &mut M,
-    mut partners: Option<Partners>,
+    partners: Option<Partners>,
 ) -> PassStats {
     let mut stats = PassStats::default();
     let mut hist = [0u16; HIST_BINS];
@@ -88,21 +88,23 @@ pub fn associate<M: Metric, const N: usize>(
     let inv_k2 = 1.0 / (gate.kernel_m * gate.kernel_m);
     let (s, c) = (libm::sinf(pose.theta), libm::cosf(pose.theta));
     let mut hint = 0;
+    // Unpacked once, so the per-point work is a plain slice access.
+    let (slots, reuse) = match partners {
+        Some(ps) => (ps.slots, ps.reuse),
+        None => (&mut [][..], false),
+    };
+    let max_bin = (HIST_BINS - 1) as f32;
     for (i, &p) in current.points().iter().enumerate() {
         let rp = Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
         let q = rp + pose.translation();
-        let seed = partners
-            .as_ref()
-            .filter(|ps| ps.reuse)
-            .and_then(|ps| ps.slots.get(i).copied())
-            .filter(|&k| k != NO_PARTNER);
+        let seed = slots.get(i).copied().filter(|&k| reuse && k != NO_PARTNER);
         let k = match seed {
             Some(k) => Some(k as usize),
             None => reference.project(q, hint).inspect(|&k| hint = k),
         };
         let found =
             k.and_then(|k| reference.nearest_in_window(q, k, cfg.search_half_window as usize));
-        if let Some(slot) = partners.as_mut().and_then(|ps| ps.slots.get_mut(i)) {
+        if let Some(slot) = slots.get_mut(i) {
             *slot = found.map_or(NO_PARTNER, |(j, _)| j as u16);
         }
         let Some((j, d2)) = found else {
@@ -125,7 +127,7 @@ pub fn associate<M: Metric, const N: usize>(
         }
         let w = 1.0 / (1.0 + r2 * inv_k2);
         acc.add(p, q, target, normal, w, pose);
-        let bin = ((r.abs() * bins_per_m) as usize).min(HIST_BINS - 1);
+        let bin = (r.abs() * bins_per_m).min(max_bin) as usize;
         hist[bin] = hist[bin].saturating_add(1);
         stats.inliers += 1;
         stats.weighted_sq_sum += w * r2;

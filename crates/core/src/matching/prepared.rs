@@ -425,11 +425,51 @@ mod tests {
         // Bearing 10.5 degrees lies between beams at 10 (index 70) and 11 (index 71).
         assert_eq!(p.project(q, 0), Some(71));
         assert_eq!(p.project(q, 120), Some(71));
+        // From a nearby hint the cross-product walk answers by itself.
+        assert_eq!(p.walk(q, 68), Some(71));
         // Behind the sensor: outside a 120-degree field of view.
         assert_eq!(p.project(Vec2::new(-1.0, 0.1), 0), None);
         // (2, 0.02) is nearer the 1-degree beam (index 61, y = 0.035) than the 0-degree one.
         let (j, _) = p.nearest_in_window(Vec2::new(2.0, 0.02), 60, 3).unwrap();
         assert_eq!(j, 61);
+    }
+
+    fn ring_scan() -> Scan<360> {
+        // A room seen all the way round at 1 degree, ranges varying like walls at mixed distances.
+        let mut s = Scan::new(0.0);
+        for i in 0..360 {
+            let a = (-180.0f32 + i as f32).to_radians();
+            s.push(Beam::new(a, 2.0 + libm::sinf(3.0 * a))).unwrap();
+        }
+        s
+    }
+
+    proptest::proptest! {
+        /// The trigonometry-free walk must land where the bearing says, from any hint, on an
+        /// open field of view and on a full ring (queries kept off exact beam bearings, where
+        /// the approximate atan2 may round either way).
+        #[test]
+        fn projection_by_cross_products_agrees_with_the_bearing(
+            beam in 0usize..360, frac in 0.05f32..0.95, range in 0.2f32..20.0, offset in -10isize..10, ring in proptest::bool::ANY,
+        ) {
+            let mut p: PreparedScan<360> = PreparedScan::default();
+            if ring {
+                p.load(&ring_scan()).unwrap();
+            } else {
+                let wall = wall_scan();
+                let mut s: Scan<360> = Scan::new(0.0);
+                for b in wall.beams() {
+                    s.push(*b).unwrap();
+                }
+                p.load(&s).unwrap();
+            }
+            let a = (-180.0f32 + beam as f32 + frac).to_radians();
+            let q = Vec2::new(range * libm::cosf(a), range * libm::sinf(a));
+            // Hints near the answer, where the walk (not the fallback) decides.
+            let near = p.project_by_bearing(q, 0).unwrap_or(0) as isize;
+            let hint = (near + offset).clamp(0, p.len() as isize) as usize;
+            proptest::prop_assert_eq!(p.project(q, hint), p.project_by_bearing(q, hint));
+        }
     }
 
     #[test]
