@@ -50,8 +50,8 @@ pub struct LandingConfig {
     /// Normal descent (m/s).
     pub descent_m_s: f32,
     /// Descent when the battery is critical or the lidar is lost (m/s): the IMU-only estimate
-    /// a lidar-lost landing flies on strays roughly with the square of the time (0.06 m after
-    /// 1 s, 0.24 m after 3 s, 0.53 m after 5 s, mean of 20 simulated seeds), so that landing is
+    /// a lidar-lost landing flies on strays roughly with the square of the time (0.05 m after
+    /// 1 s, 0.20 m after 3 s, 0.52 m after 5 s, mean of 20 simulated seeds), so that landing is
     /// kept short.
     pub urgent_descent_m_s: f32,
     /// Below this estimated height (m) the vehicle counts as on the ground: integrators freeze,

@@ -15,9 +15,9 @@ pub struct SupervisorConfig {
     /// No accepted scan match for this long (s) raises "lidar lost"; holding continues on the IMU.
     pub lidar_timeout_s: f32,
     /// After "lidar lost", hold on the IMU this much longer (s), then land. Short: it rides out
-    /// a lidar that comes back, but the IMU-only hold strays (0.13 m 2 s after the last scan,
-    /// 0.24 m after 3 s, 0.39 m after 4 s, mean of 20 simulated seeds), and with 3 s here plus a
-    /// slow landing the simulated vehicle reached the walls of a small room in 6 to 10 of 20.
+    /// a lidar that comes back, but the IMU-only hold strays (0.11 m 2 s after the last scan,
+    /// 0.20 m after 3 s, 0.35 m after 4 s, mean of 20 simulated seeds), and with 3 s here plus a
+    /// 0.5 m/s landing the simulated vehicle reached the walls of a small room in 4 to 8 of 20.
     pub lidar_hold_s: f32,
     /// Pack voltage below which the vehicle lands (V); default 3.5 V per cell of a 3S pack.
     pub battery_low_v: f32,
