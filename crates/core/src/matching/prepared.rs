@@ -329,8 +329,18 @@ impl<const N: usize> PreparedScan<N> {
 
 /// Index and squared distance of the point in `points` nearest to `q` (the first of equals).
 fn nearest_among(points: &[Vec2], q: Vec2) -> Option<(usize, f32)> {
+    // The default window (3 a side) as a fixed-length array: the compiler unrolls the loop, which
+    // is most of the search's cost.
+    match <&[Vec2; 6]>::try_from(points) {
+        Ok(window) => argmin_distance(window.iter(), q),
+        Err(_) => argmin_distance(points.iter(), q),
+    }
+}
+
+#[inline(always)]
+fn argmin_distance<'a>(points: impl Iterator<Item = &'a Vec2>, q: Vec2) -> Option<(usize, f32)> {
     let mut best = (0, f32::INFINITY);
-    for (j, p) in points.iter().enumerate() {
+    for (j, p) in points.enumerate() {
         let d2 = (*p - q).norm_squared();
         if d2 < best.1 {
             best = (j, d2);
