@@ -6,7 +6,7 @@ use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::Args;
 use plumbline_core::geom::Pose2;
 use plumbline_core::matching::local_map::{
-    LineMap, LineMapConfig, MapCell, MapUse, MappedOdometry, RefineConfig,
+    LineMap, LineMapConfig, MapCell, MapUse, MappedOdometry, RefineConfig, RelocalizeConfig,
 };
 use plumbline_core::matching::{
     LidarOdometry, MatchConfig, MatcherKind, OdometryConfig, OdometryStep,
@@ -47,6 +47,10 @@ pub struct OdometryArgs {
     /// scan-to-keyframe odometry, which drifts more (BENCHMARKS.md).
     #[arg(long)]
     pub no_local_map: bool,
+    /// Do not search for the pose at which a keyframe lines up with walls mapped long ago
+    /// (what takes the drift out at the end of a loop).
+    #[arg(long)]
+    pub no_relocalize: bool,
     /// Local map cell edge, m.
     #[arg(long, default_value_t = LineMapConfig::default().cell_m)]
     pub map_cell: f32,
@@ -91,11 +95,14 @@ pub fn run(args: OdometryArgs) -> CliResult {
     let mut odometry = if use_map {
         let map = LineMap::new(&mut cells, map_config)
             .map_err(|e| CliError(format!("local map: {e:?}")))?;
-        Odometer::Mapped(Box::new(MappedOdometry::new(config, map, refine)))
+        let relocalize = (!args.no_relocalize).then(RelocalizeConfig::default);
+        Odometer::Mapped(Box::new(MappedOdometry::new(
+            config, map, refine, relocalize,
+        )))
     } else {
         Odometer::Plain(Box::new(LidarOdometry::new(config)))
     };
-    let (mut map_refined, mut map_refused) = (0usize, 0usize);
+    let (mut map_refined, mut map_refused, mut map_relocalized) = (0usize, 0usize, 0usize);
     let bar = progress(log.scans.len() as u64, "odometry");
     let mut times_us = Vec::with_capacity(log.scans.len());
     let mut trajectory = Vec::with_capacity(log.scans.len());
@@ -123,6 +130,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
         let elapsed = start.elapsed();
         match map_use {
             Some(MapUse::Refined(_)) => map_refined += 1,
+            Some(MapUse::Relocalized(_)) => map_relocalized += 1,
             Some(MapUse::Refused(_)) => map_refused += 1,
             _ => {}
         }
@@ -182,6 +190,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
         "local_map": use_map,
         "map_aligned_keyframes": map_refined,
         "map_refused_keyframes": map_refused,
+        "map_relocalized_keyframes": map_relocalized,
         "non_monotonic_scans": log.stats.non_monotonic_scans,
         "bad_lines": log.stats.bad_lines,
     });

@@ -155,6 +155,9 @@ fn robotlaser1_version_of_the_excerpt_gives_the_same_trajectory() {
             input.to_str().unwrap(),
             "--out",
             traj.to_str().unwrap(),
+            // The formats are what is compared; the map would amplify their last-digit
+            // differences in the ranges into centimetres over a few hundred scans.
+            "--no-local-map",
         ]);
         assert!(ok, "{err}");
     }

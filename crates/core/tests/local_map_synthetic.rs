@@ -3,7 +3,8 @@
 
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::matching::local_map::{
-    refine, LineMap, LineMapConfig, MapCell, MappedOdometry, RefineConfig, RefineRefusal, Sym3,
+    refine, relocalize, Declined, LineMap, LineMapConfig, MapCell, MappedOdometry, RefineConfig,
+    RefineRefusal, RelocalizeConfig, Sym3,
 };
 use plumbline_core::matching::{LidarOdometry, OdometryConfig, PreparedScan};
 use plumbline_core::scan::Scan;
@@ -20,12 +21,12 @@ fn points(world: &[Seg], pose: Pose2, seed: u64) -> Vec<Vec2> {
     prepared.points().to_vec()
 }
 
-/// A map of `world` made from scans at `poses`, inserted at their true poses.
+/// A map of `world` made from scans at `poses`, inserted at their true poses at stamp 0.
 fn mapped<'a>(cells: &'a mut [MapCell], world: &[Seg], poses: &[Pose2]) -> LineMap<'a> {
     let mut map = LineMap::new(cells, LineMapConfig::default()).unwrap();
     for (k, &pose) in poses.iter().enumerate() {
         for p in points(world, pose, 100 + k as u64) {
-            map.insert(pose.transform(p));
+            map.insert(pose.transform(p), 0);
         }
     }
     map
@@ -112,6 +113,7 @@ fn mapped_odometry_drifts_less_than_scan_to_keyframe_odometry() {
         OdometryConfig::default(),
         map,
         RefineConfig::default(),
+        None,
     ));
     // An ellipse that keeps 0.2 m or more from the pillar and 0.6 m from the walls.
     let at = |phase: f32| Pose2::new(2.0 * phase.cos(), 1.4 * phase.sin(), phase + TAU / 4.0);
@@ -134,4 +136,63 @@ fn mapped_odometry_drifts_less_than_scan_to_keyframe_odometry() {
         worst_mapped < 0.7 * worst_plain,
         "mapped {worst_mapped} plain {worst_plain}"
     );
+}
+
+/// Back in a mapped room with half a metre and two degrees of drift: too far for the refinement,
+/// found by the search, then polished by the refinement.
+#[test]
+fn relocalization_takes_out_drift_beyond_the_refinement_s_reach() {
+    // The room at three times its size: in the small one a few tenths of a degree move no wall
+    // by more than the search's inlier distance, so heading is not resolved to a step.
+    let world: Vec<Seg> = room().iter().map(|&(a, b)| (a * 3.0, b * 3.0)).collect();
+    let mut cells = vec![MapCell::default(); 128 * 128];
+    let survey: Vec<Pose2> = (0..12)
+        .map(|k| Pose2::new(-6.0 + 1.2 * k as f32, 0.4 * (k % 3) as f32, 0.5 * k as f32))
+        .collect();
+    let map = mapped(&mut cells, &world, &survey);
+    let truth = Pose2::new(2.4, 1.2, 0.3);
+    let drifted = Pose2::new(2.85, 0.95, 0.335);
+    let pts = points(&world, truth, 11);
+    let config = RelocalizeConfig::default();
+    let now = config.min_age;
+    let found = relocalize(&map, &pts, drifted, now, &config).unwrap();
+    let (d, a) = truth.distance_to(found);
+    assert!(d < 0.1 && a < 0.015, "{d} m {a} rad: {found:?}");
+    let polished = refine(&map, &pts, found, weak_prior(), &RefineConfig::default()).unwrap();
+    let (d, a) = truth.distance_to(polished.pose);
+    assert!(d < 0.01 && a < 0.003, "{d} m {a} rad: {polished:?}");
+}
+
+#[test]
+fn relocalization_declines_young_maps_and_keeps_a_corridor_s_axis() {
+    let world = room();
+    let mut cells = vec![MapCell::default(); 64 * 64];
+    let map = mapped(&mut cells, &world, &[Pose2::IDENTITY]);
+    let pts = points(&world, Pose2::IDENTITY, 12);
+    let config = RelocalizeConfig::default();
+    // Walls born at stamp 0 are not old yet one keyframe later.
+    let r = relocalize(&map, &pts, Pose2::new(0.4, 0.0, 0.0), 1, &config);
+    assert!(r.is_err(), "{r:?}");
+    assert_eq!(
+        relocalize(&map, &[], Pose2::IDENTITY, 100, &config),
+        Err(Declined::NothingToSearch)
+    );
+
+    // In a corridor every pose along the axis fits: the search fixes the offset across it and
+    // the heading, and stays where the guess was along it.
+    let world = corridor();
+    let mut cells = vec![MapCell::default(); 128 * 128];
+    let map = mapped(
+        &mut cells,
+        &world,
+        &[Pose2::new(-1.0, 0.0, 0.0), Pose2::new(1.0, 0.0, 0.0)],
+    );
+    let truth = Pose2::new(0.0, 0.0, 0.0);
+    let drifted = Pose2::new(0.3, 0.4, 0.03);
+    let found = relocalize(&map, &points(&world, truth, 13), drifted, 100, &config).unwrap();
+    assert!(
+        found.y.abs() < 0.1 && found.theta.abs() < 0.015,
+        "{found:?}"
+    );
+    assert!((found.x - drifted.x).abs() < 0.15, "{found:?}");
 }

@@ -17,6 +17,7 @@ use crate::matching::linalg::sym2_eigen;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MapCell {
     index: [i16; 2],
+    born: u32,
     weight: f32,
     sx: f32,
     sy: f32,
@@ -33,6 +34,9 @@ pub struct CellLine {
     pub normal: Vec2,
     /// Variance of the cell's points across the line, m².
     pub across_variance_m2: f32,
+    /// Stamp of the insert that started the cell (the caller's clock, e.g. a keyframe count):
+    /// tells walls mapped long ago from walls just added.
+    pub born: u32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -106,8 +110,9 @@ impl<'a> LineMap<'a> {
         self.side as f32 * self.config.cell_m
     }
 
-    /// Adds one wall point (world frame). Points outside the representable range are ignored.
-    pub fn insert(&mut self, p: Vec2) {
+    /// Adds one wall point (world frame) at time `stamp`. Points outside the representable range
+    /// are ignored.
+    pub fn insert(&mut self, p: Vec2, stamp: u32) {
         let Some(index) = self.index_of(p) else {
             return;
         };
@@ -118,6 +123,7 @@ impl<'a> LineMap<'a> {
         if cell.index != index || cell.weight <= 0.0 {
             *cell = MapCell {
                 index,
+                born: stamp,
                 ..MapCell::default()
             };
         }
@@ -213,6 +219,7 @@ fn fit_line(cell: &MapCell, centre: Vec2, config: &LineMapConfig) -> Option<Cell
         mean: centre + Vec2::new(mx, my),
         normal,
         across_variance_m2: lo,
+        born: cell.born,
     })
 }
 
@@ -235,7 +242,7 @@ mod tests {
     fn wall(map: &mut LineMap, from: Vec2, to: Vec2, n: usize) {
         for k in 0..n {
             let t = k as f32 / (n - 1) as f32;
-            map.insert(from + (to - from) * t);
+            map.insert(from + (to - from) * t, 0);
         }
     }
 
@@ -332,10 +339,10 @@ mod tests {
         fn lookups_never_panic(x in -1.0e6f32..1.0e6, y in -1.0e6f32..1.0e6) {
             let mut cells = [MapCell::default(); 4 * 4];
             let mut map = LineMap::new(&mut cells, LineMapConfig::default()).unwrap();
-            map.insert(Vec2::new(x, y));
+            map.insert(Vec2::new(x, y), 0);
             let _ = map.lines_near(Vec2::new(x, y));
             let _ = map.lines_near(Vec2::new(f32::NAN, y));
-            map.insert(Vec2::new(f32::INFINITY, y));
+            map.insert(Vec2::new(f32::INFINITY, y), 0);
         }
 
         #[test]

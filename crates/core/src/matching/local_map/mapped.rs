@@ -3,6 +3,7 @@
 
 use super::cells::LineMap;
 use super::refine::{refine, RefineConfig, RefineRefusal, Refined};
+use super::relocalize::{relocalize, Declined, RelocalizeConfig};
 use crate::geom::Pose2;
 use crate::matching::linalg::Sym3;
 use crate::matching::{LidarOdometry, MatchResult, OdometryConfig, OdometryStep};
@@ -15,6 +16,9 @@ pub enum MapUse {
     NotKeyframe,
     /// The keyframe was aligned with the map, then added to it.
     Refined(Refined),
+    /// The keyframe lined up with walls mapped long ago at a pose the refinement alone could
+    /// not reach (the end of a loop); it was moved there, then added.
+    Relocalized(Refined),
     /// The map could not align the keyframe; it was added at the scan matcher's pose.
     Refused(RefineRefusal),
     /// The keyframe came from a failed match (a guess), so it was neither aligned nor added.
@@ -25,20 +29,29 @@ pub enum MapUse {
 pub struct MappedStep {
     pub step: OdometryStep,
     pub map: MapUse,
+    /// The relocalization search, when one ran for this scan.
+    pub search: Option<Result<Pose2, Declined>>,
 }
 
 pub struct MappedOdometry<'m, const N: usize> {
     odometry: LidarOdometry<N>,
     map: LineMap<'m>,
     refine: RefineConfig,
+    relocalize: Option<RelocalizeConfig>,
 }
 
 impl<'m, const N: usize> MappedOdometry<'m, N> {
-    pub fn new(config: OdometryConfig, map: LineMap<'m>, refine: RefineConfig) -> Self {
+    pub fn new(
+        config: OdometryConfig,
+        map: LineMap<'m>,
+        refine: RefineConfig,
+        relocalize: Option<RelocalizeConfig>,
+    ) -> Self {
         Self {
             odometry: LidarOdometry::new(config),
             map,
             refine,
+            relocalize,
         }
     }
 
@@ -58,52 +71,81 @@ impl<'m, const N: usize> MappedOdometry<'m, N> {
             return MappedStep {
                 step,
                 map: MapUse::NotKeyframe,
+                search: None,
             };
         }
-        let map = match step {
+        let (map, search) = match step {
             OdometryStep::Started => {
                 self.add_keyframe();
-                MapUse::Refined(Refined {
+                let first = Refined {
                     pose: self.odometry.pose(),
                     matched: 0,
                     iterations: 0,
-                })
+                };
+                (MapUse::Refined(first), None)
             }
             OdometryStep::Matched { result, .. } => self.align_keyframe(&result, previous_keyframe),
-            OdometryStep::Predicted { .. } => MapUse::Skipped,
+            OdometryStep::Predicted { .. } => (MapUse::Skipped, None),
         };
-        MappedStep { step, map }
+        MappedStep { step, map, search }
     }
 
-    fn align_keyframe(&mut self, result: &MatchResult, previous_keyframe: Pose2) -> MapUse {
-        let Some(information) = information_in_world(
-            &result.covariance,
-            self.refine.matcher_weight,
-            previous_keyframe.theta,
-        ) else {
-            return MapUse::Refused(RefineRefusal::Diverged);
+    fn align_keyframe(
+        &mut self,
+        result: &MatchResult,
+        previous_keyframe: Pose2,
+    ) -> (MapUse, Option<Result<Pose2, Declined>>) {
+        let now = self.odometry.keyframes_taken();
+        let points = self.odometry.keyframe_points();
+        let search = self
+            .relocalize
+            .as_ref()
+            .filter(|r| r.every_keyframes > 0 && now.is_multiple_of(r.every_keyframes))
+            .map(|r| relocalize(&self.map, points, self.odometry.pose(), now, r));
+        // A pose the search found counts only if it is a real jump (near the guess the
+        // refinement does better on its own) and only once the refinement, with no prior but
+        // the map, confirms it off the search's grid.
+        let guess = self.odometry.pose();
+        let relocalized = search
+            .and_then(Result::ok)
+            .zip(self.relocalize.as_ref())
+            .filter(|(found, r)| {
+                let (shift, turn) = guess.distance_to(*found);
+                shift > r.min_jump_m || turn > r.min_jump_rad
+            })
+            .and_then(|(found, _)| {
+                refine(&self.map, points, found, Sym3::default(), &self.refine).ok()
+            });
+        let used = match relocalized {
+            Some(refined) => MapUse::Relocalized(refined),
+            None => {
+                let outcome = information_in_world(
+                    &result.covariance,
+                    self.refine.matcher_weight,
+                    previous_keyframe.theta,
+                )
+                .ok_or(RefineRefusal::Diverged)
+                .and_then(|information| {
+                    refine(&self.map, points, guess, information, &self.refine)
+                });
+                match outcome {
+                    Ok(refined) => MapUse::Refined(refined),
+                    Err(refusal) => MapUse::Refused(refusal),
+                }
+            }
         };
-        let outcome = refine(
-            &self.map,
-            self.odometry.keyframe_points(),
-            self.odometry.pose(),
-            information,
-            &self.refine,
-        );
-        if let Ok(refined) = outcome {
-            self.odometry.reanchor_keyframe(refined.pose);
+        if let MapUse::Refined(r) | MapUse::Relocalized(r) = used {
+            self.odometry.reanchor_keyframe(r.pose);
         }
         self.add_keyframe();
-        match outcome {
-            Ok(refined) => MapUse::Refined(refined),
-            Err(refusal) => MapUse::Refused(refusal),
-        }
+        (used, search)
     }
 
     fn add_keyframe(&mut self) {
         let pose = self.odometry.pose();
+        let stamp = self.odometry.keyframes_taken();
         for &p in self.odometry.keyframe_points() {
-            self.map.insert(pose.transform(p));
+            self.map.insert(pose.transform(p), stamp);
         }
     }
 }

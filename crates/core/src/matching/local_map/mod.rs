@@ -4,9 +4,11 @@
 mod cells;
 mod mapped;
 mod refine;
+mod relocalize;
 
 /// The prior's information matrix type of [`refine`].
 pub use crate::matching::linalg::Sym3;
 pub use cells::{CellLine, LineMap, LineMapConfig, LineMapError, MapCell};
 pub use mapped::{MapUse, MappedOdometry, MappedStep};
 pub use refine::{refine, RefineConfig, RefineRefusal, Refined};
+pub use relocalize::{relocalize, Declined, RelocalizeConfig, SearchScores};
