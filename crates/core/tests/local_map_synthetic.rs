@@ -196,3 +196,14 @@ fn relocalization_declines_young_maps_and_keeps_a_corridor_s_axis() {
     );
     assert!((found.x - drifted.x).abs() < 0.15, "{found:?}");
 }
+
+/// What the map costs an embedded user: one `MapCell` per cell of the caller's buffer.
+#[test]
+fn a_map_cell_stays_small() {
+    let cell = std::mem::size_of::<MapCell>();
+    println!(
+        "MapCell {cell} B; 64 x 64 cells (16 m at 0.25 m) = {} KB",
+        cell * 4096 / 1024
+    );
+    assert!(cell <= 64, "{cell}");
+}
