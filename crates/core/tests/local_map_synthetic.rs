@@ -170,7 +170,7 @@ fn relocalization_declines_young_maps_and_keeps_a_corridor_s_axis() {
     let map = mapped(&mut cells, &world, &[Pose2::IDENTITY]);
     let pts = points(&world, Pose2::IDENTITY, 12);
     let config = RelocalizeConfig::default();
-    // Walls born at stamp 0 are not old yet one keyframe later.
+    // Walls mapped at stamp 0 are not old yet one keyframe later.
     let r = relocalize(&map, &pts, Pose2::new(0.4, 0.0, 0.0), 1, &config);
     assert!(r.is_err(), "{r:?}");
     assert_eq!(

@@ -17,7 +17,7 @@ use crate::matching::linalg::sym2_eigen;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MapCell {
     index: [i16; 2],
-    born: u32,
+    mean_stamp: f32,
     weight: f32,
     sx: f32,
     sy: f32,
@@ -34,9 +34,10 @@ pub struct CellLine {
     pub normal: Vec2,
     /// Variance of the cell's points across the line, m².
     pub across_variance_m2: f32,
-    /// Stamp of the insert that started the cell (the caller's clock, e.g. a keyframe count):
-    /// tells walls mapped long ago from walls just added.
-    pub born: u32,
+    /// Mean stamp of the cell's points (the caller's clock, e.g. a keyframe count), faded like
+    /// the points: walls mapped long ago and left alone since stay old even after a few new
+    /// points land on them, while walls seen again at every keyframe stay young.
+    pub mean_stamp: f32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -123,7 +124,6 @@ impl<'a> LineMap<'a> {
         if cell.index != index || cell.weight <= 0.0 {
             *cell = MapCell {
                 index,
-                born: stamp,
                 ..MapCell::default()
             };
         }
@@ -137,6 +137,7 @@ impl<'a> LineMap<'a> {
             cell.syy *= keep;
         }
         let d = p - centre;
+        cell.mean_stamp += (stamp as f32 - cell.mean_stamp) / (cell.weight + 1.0);
         cell.weight += 1.0;
         cell.sx += d.x;
         cell.sy += d.y;
@@ -219,7 +220,7 @@ fn fit_line(cell: &MapCell, centre: Vec2, config: &LineMapConfig) -> Option<Cell
         mean: centre + Vec2::new(mx, my),
         normal,
         across_variance_m2: lo,
-        born: cell.born,
+        mean_stamp: cell.mean_stamp,
     })
 }
 
@@ -332,6 +333,29 @@ mod tests {
         }
         let line = map.lines_near(Vec2::new(0.1, 0.12))[0].unwrap();
         assert!((line.mean.y - 0.14).abs() < 0.005, "{:?}", line.mean);
+    }
+
+    #[test]
+    fn a_wall_seen_again_and_again_stays_young_and_a_wall_left_behind_stays_old() {
+        let mut cells = [MapCell::default(); 16 * 16];
+        let mut map = LineMap::new(&mut cells, LineMapConfig::default()).unwrap();
+        let seen = |map: &mut LineMap, y: f32, stamp: u32| {
+            for k in 0..10 {
+                map.insert(Vec2::new(0.02 + 0.02 * k as f32, y), stamp);
+            }
+        };
+        for stamp in 0..20 {
+            seen(&mut map, 0.1, stamp);
+            if stamp < 4 {
+                seen(&mut map, 0.6, stamp);
+            }
+        }
+        // One keyframe touches the old wall again at stamp 19.
+        seen(&mut map, 0.6, 19);
+        let young = map.lines_near(Vec2::new(0.1, 0.1))[0].unwrap();
+        let old = map.lines_near(Vec2::new(0.1, 0.6))[0].unwrap();
+        assert!(young.mean_stamp > 15.0, "{young:?}");
+        assert!(old.mean_stamp < 10.0, "{old:?}");
     }
 
     proptest! {

@@ -5,7 +5,7 @@
 //! guess is off by tens of centimetres to a metre: it then lines the scan up with the walls it
 //! has just mapped itself (which carry the same drift) and the old walls of the same corridor
 //! are mapped again beside themselves. The search scores a window of poses against the old
-//! walls only (cells born at least `min_age` keyframes ago) with a soft inlier count, the idea of
+//! walls only (cells whose points are on average at least `min_age` keyframes old) with a soft inlier count, the idea of
 //! correlative scan matching (Olson 2009) on the line map, and accepts the best pose only if it
 //! is clearly better than the guess and clearly better than any distinct alternative: in a
 //! corridor, where poses along the axis score alike, it declines.
@@ -32,8 +32,8 @@ pub struct RelocalizeConfig {
     pub max_scored_points: usize,
     /// Distance to an old wall at which a point stops counting, m (soft count, linear fall-off).
     pub inlier_m: f32,
-    /// Cells born fewer keyframes ago than this are the vehicle's own recent (drifted) map and
-    /// are not searched against.
+    /// Cells whose points are younger than this on average are the vehicle's own recent
+    /// (drifted) map and are not searched against.
     pub min_age: u32,
     /// The best pose must explain at least this fraction of the scan's points…
     pub min_score_ratio: f32,
@@ -101,7 +101,7 @@ pub fn relocalize(
     if points.is_empty() || !(config.step_m > 0.0 && config.step_rad > 0.0) {
         return Err(Declined::NothingToSearch);
     }
-    let born_before = now
+    let old_before = now
         .checked_sub(config.min_age)
         .ok_or(Declined::NothingToSearch)?;
     // Scores a translation for points already rotated by the candidate heading.
@@ -117,7 +117,7 @@ pub fn relocalize(
                 map.lines_near(w)
                     .into_iter()
                     .flatten()
-                    .filter(|l| l.born <= born_before)
+                    .filter(|l| l.mean_stamp <= old_before as f32)
                     .map(|l| 1.0 - (w - l.mean).dot(l.normal).abs() / config.inlier_m)
                     .fold(0.0f32, f32::max)
             })
