@@ -88,7 +88,9 @@ fn excerpt_icl_is_centimetre_accurate_and_copies_timestamps() {
     assert_eq!(odo["failed_matches"], 0);
     assert_eq!(odo["non_monotonic_scans"], 31);
     assert_eq!(ev["matched"], 46, "{ev}");
-    assert!(f(&ev, "trans_mean_m") < 0.05, "{ev}");
+    // 0.016 m; a wrong relocalization jump (0.75 m along the corridor at 82 s, fixed in
+    // 9f0381c) made it 0.034 m.
+    assert!(f(&ev, "trans_mean_m") < 0.025, "{ev}");
     assert!(f(&ev, "rot_mean_deg") < 1.0, "{ev}");
     // Timestamps are copied exactly from the scans, in file order.
     let traj = std::fs::read_to_string(tmp("intel-excerpt.clf-.txt")).unwrap();
@@ -236,7 +238,10 @@ fn full_intel_subset_lidar_only() {
     println!("intel icl lidar-only: {odo}\n{ev}");
     assert_eq!(ev["matched"], 1030);
     assert_eq!(odo["failed_matches"], 0);
-    assert!(f(&ev, "near_trans_mean_m") < 0.03, "{ev}");
+    // 0.030 m near, 0.085 m overall with the local map (BENCHMARKS.md): the overall figure moves
+    // by several centimetres with any change, so only a loss of the map's gain should trip this.
+    assert!(f(&ev, "near_trans_mean_m") < 0.04, "{ev}");
+    assert!(f(&ev, "trans_mean_m") < 0.4, "{ev}");
 }
 
 #[test]
