@@ -221,7 +221,9 @@ fn full_mit_csail_log_lidar_only() {
     println!("mit-csail icl lidar-only: {odo}\n{ev}");
     assert_eq!(ev["matched"], 1172);
     assert_eq!(odo["failed_matches"], 0);
-    assert!(f(&ev, "near_trans_mean_m") < 0.04, "{ev}");
+    // 0.030 m: the map's keyframe moves cost MIT's near relations half a centimetre over plain
+    // odometry, and unconfirmed relocalization jumps cost 1.6 cm (0.041 m).
+    assert!(f(&ev, "near_trans_mean_m") < 0.036, "{ev}");
     // The far relations measure accumulated drift, which swings by tens of cm with any change to
     // the matcher (BENCHMARKS.md); only a gross regression should trip this.
     assert!(f(&ev, "trans_mean_m") < 0.8, "{ev}");

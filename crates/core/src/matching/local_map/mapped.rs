@@ -38,6 +38,9 @@ pub struct MappedOdometry<'m, const N: usize> {
     map: LineMap<'m>,
     refine: RefineConfig,
     relocalize: Option<RelocalizeConfig>,
+    /// A jump the last search proposed, as the world transform from the drifted pose to the
+    /// found one, waiting for the next search to propose the same before it is made.
+    pending_jump: Option<Pose2>,
 }
 
 impl<'m, const N: usize> MappedOdometry<'m, N> {
@@ -52,6 +55,7 @@ impl<'m, const N: usize> MappedOdometry<'m, N> {
             map,
             refine,
             relocalize,
+            pending_jump: None,
         }
     }
 
@@ -100,22 +104,36 @@ impl<'m, const N: usize> MappedOdometry<'m, N> {
         let search = self
             .relocalize
             .as_ref()
-            .filter(|r| r.every_keyframes > 0 && now.is_multiple_of(r.every_keyframes))
+            .filter(|r| {
+                r.every_keyframes > 0
+                    && (self.pending_jump.is_some() || now.is_multiple_of(r.every_keyframes))
+            })
             .map(|r| relocalize(&self.map, points, self.odometry.pose(), now, r));
         // A pose the search found counts only if it is a real jump (near the guess the
-        // refinement does better on its own) and only once the refinement, with no prior but
-        // the map, confirms it off the search's grid.
+        // refinement does better on its own), if the search at the next keyframe proposes the
+        // same jump (a wrong fit in clutter rarely repeats, a drift does), and once the
+        // refinement, with no prior but the map, confirms it off the search's grid.
         let guess = self.odometry.pose();
-        let relocalized = search
+        let proposed = search
             .and_then(Result::ok)
             .zip(self.relocalize.as_ref())
             .filter(|(found, r)| {
                 let (shift, turn) = guess.distance_to(*found);
                 shift > r.min_jump_m || turn > r.min_jump_rad
-            })
-            .and_then(|(found, _)| {
-                refine(&self.map, points, found, Sym3::default(), &self.refine).ok()
             });
+        let confirmed = proposed.filter(|(found, r)| {
+            self.pending_jump.is_some_and(|jump| {
+                let (shift, turn) = jump.compose(guess).distance_to(*found);
+                shift <= r.min_jump_m && turn <= r.min_jump_rad
+            })
+        });
+        self.pending_jump = match confirmed {
+            Some(_) => None,
+            None => proposed.map(|(found, _)| found.compose(guess.inverse())),
+        };
+        let relocalized = confirmed.and_then(|(found, _)| {
+            refine(&self.map, points, found, Sym3::default(), &self.refine).ok()
+        });
         let used = match relocalized {
             Some(refined) => MapUse::Relocalized(refined),
             None => {
