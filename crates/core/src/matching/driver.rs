@@ -131,9 +131,7 @@ pub fn run<S: Solve, const N: usize>(
 
 /// The translation direction the pass's information does not pin down, if any.
 fn degenerate_direction(stats: &PassStats, ratio: f32) -> Option<Vec2> {
-    let (a, b, c) = stats.information.translation_schur();
-    let (hi, lo, v) = sym2_eigen(a, b, c);
-    (hi > 0.0 && lo < ratio * hi).then_some(v)
+    stats.information.weak_translation(ratio).map(|(_, v)| v)
 }
 
 #[allow(clippy::too_many_arguments)]

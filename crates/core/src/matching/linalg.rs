@@ -51,6 +51,38 @@ impl Sym3 {
         self.tt += w * j[2] * j[2];
     }
 
+    /// From a full symmetric matrix (its upper triangle is read).
+    pub fn from_array(m: [[f32; 3]; 3]) -> Self {
+        Self {
+            xx: m[0][0],
+            xy: m[0][1],
+            xt: m[0][2],
+            yy: m[1][1],
+            yt: m[1][2],
+            tt: m[2][2],
+        }
+    }
+
+    pub fn plus(&self, o: &Sym3) -> Sym3 {
+        Sym3 {
+            xx: self.xx + o.xx,
+            xy: self.xy + o.xy,
+            xt: self.xt + o.xt,
+            yy: self.yy + o.yy,
+            yt: self.yt + o.yt,
+            tt: self.tt + o.tt,
+        }
+    }
+
+    /// The translation direction this information barely pins down once rotation is free (a
+    /// corridor's axis), with the information along the best-pinned direction: `Some` when
+    /// least over most is below `ratio`.
+    pub fn weak_translation(&self, ratio: f32) -> Option<(f32, Vec2)> {
+        let (a, b, c) = self.translation_schur();
+        let (hi, lo, v) = sym2_eigen(a, b, c);
+        (hi > 0.0 && lo < ratio * hi).then_some((hi, v))
+    }
+
     pub fn to_array(self) -> [[f32; 3]; 3] {
         [
             [self.xx, self.xy, self.xt],

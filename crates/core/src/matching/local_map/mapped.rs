@@ -171,15 +171,7 @@ impl<'m, const N: usize> MappedOdometry<'m, N> {
 /// The scan matcher's information (inverse covariance of the motion in the previous keyframe's
 /// frame) re-expressed for a world-frame pose: `B Λ Bᵀ` with `B = diag(R(heading), 1)`.
 fn information_in_world(covariance: &[[f32; 3]; 3], weight: f32, heading: f32) -> Option<Sym3> {
-    let m = Sym3 {
-        xx: covariance[0][0],
-        xy: covariance[0][1],
-        xt: covariance[0][2],
-        yy: covariance[1][1],
-        yt: covariance[1][2],
-        tt: covariance[2][2],
-    }
-    .inverse()?;
+    let m = Sym3::from_array(*covariance).inverse()?;
     let (s, c) = (libm::sinf(heading), libm::cosf(heading));
     Some(Sym3 {
         xx: weight * (c * c * m.xx - 2.0 * c * s * m.xy + s * s * m.yy),

@@ -9,7 +9,7 @@
 
 use super::cells::LineMap;
 use crate::geom::{normalize_angle, Pose2, Vec2};
-use crate::matching::linalg::{sym2_eigen, Sym3};
+use crate::matching::linalg::Sym3;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RefineConfig {
@@ -121,17 +121,14 @@ pub fn refine(
         if matched < needed {
             return Err(RefineRefusal::TooFewMatched { matched, needed });
         }
-        let prior = sum(
-            &prior_information,
-            &pin_unobserved(&h, config.min_conditioning),
-        );
+        let prior = prior_information.plus(&pin_unobserved(&h, config.min_conditioning));
         let offset = [
             pose.x - guess.x,
             pose.y - guess.y,
             normalize_angle(pose.theta - guess.theta),
         ];
         let pulled = prior.mul(offset);
-        let h = sum(&h, &prior);
+        let h = h.plus(&prior);
         let rhs = [
             -(g[0] + pulled[0]),
             -(g[1] + pulled[1]),
@@ -160,27 +157,14 @@ pub fn refine(
 /// cell normals would still pull along it; a prior as strong as the best-constrained direction
 /// holds the guess there instead, the way the scan matcher's own degenerate direction is held.
 fn pin_unobserved(map_information: &Sym3, min_conditioning: f32) -> Sym3 {
-    let (a, b, c) = map_information.translation_schur();
-    let (hi, lo, v) = sym2_eigen(a, b, c);
-    if hi <= 0.0 || lo >= min_conditioning * hi {
-        return Sym3::default();
-    }
-    Sym3 {
-        xx: hi * v.x * v.x,
-        xy: hi * v.x * v.y,
-        yy: hi * v.y * v.y,
-        ..Sym3::default()
-    }
-}
-
-fn sum(a: &Sym3, b: &Sym3) -> Sym3 {
-    Sym3 {
-        xx: a.xx + b.xx,
-        xy: a.xy + b.xy,
-        xt: a.xt + b.xt,
-        yy: a.yy + b.yy,
-        yt: a.yt + b.yt,
-        tt: a.tt + b.tt,
+    match map_information.weak_translation(min_conditioning) {
+        Some((hi, v)) => Sym3 {
+            xx: hi * v.x * v.x,
+            xy: hi * v.x * v.y,
+            yy: hi * v.y * v.y,
+            ..Sym3::default()
+        },
+        None => Sym3::default(),
     }
 }
 
