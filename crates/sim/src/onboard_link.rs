@@ -115,6 +115,8 @@ pub struct OnboardLink<const N: usize> {
     script: Script,
     /// The newest IMU sample; the runner calls at the IMU's rate, so it is rarely stale.
     last_imu: ImuSample,
+    /// The revolution being handed over, in the onboard format.
+    scan: Box<Scan<N>>,
     next_sample_s: f64,
     log: Rc<RefCell<FlightLog>>,
 }
@@ -139,6 +141,7 @@ impl<const N: usize> OnboardLink<N> {
             onboard: Box::new(Onboard::new(odometry, autopilot)),
             script,
             last_imu: ImuSample::default(),
+            scan: Box::new(Scan::new(0.0)),
             next_sample_s: 0.0,
             log: log.clone(),
         };
@@ -146,9 +149,11 @@ impl<const N: usize> OnboardLink<N> {
     }
 }
 
-/// The simulator's revolution as an onboard scan; the device's validity flags are kept.
-fn to_scan<const N: usize>(s: &LidarScan) -> Scan<N> {
-    let mut scan = Scan::new(s.stamp_s);
+/// Writes the simulator's revolution into `scan` as an onboard scan; the device's validity
+/// flags are kept. In place: a 1,440-beam scan is 23 kB, and returning one by value copied it
+/// twice per revolution.
+fn fill_scan<const N: usize>(s: &LidarScan, scan: &mut Scan<N>) {
+    scan.clear(s.stamp_s);
     for (k, (&r, &ok)) in s.ranges_m.iter().zip(&s.valid).take(N).enumerate() {
         let angle = (s.start_angle_rad + s.increment_rad * k as f64) as f32;
         let beam = if ok {
@@ -159,7 +164,6 @@ fn to_scan<const N: usize>(s: &LidarScan) -> Scan<N> {
         // At most N beams are taken (and `new` checked the profile), so the scan cannot be full.
         let _ = scan.push(beam);
     }
-    scan
 }
 
 impl<const N: usize> FlightSoftware for OnboardLink<N> {
@@ -179,7 +183,13 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             .find(|(t, _)| *t <= frame.t_s)
             .is_some_and(|(_, a)| *a);
         let lidar_alive = self.script.lidar_dies_at_s.is_none_or(|t| frame.t_s < t);
-        let scan = frame.scans.last().filter(|_| lidar_alive).map(to_scan::<N>);
+        let scan = match frame.scans.last() {
+            Some(s) if lidar_alive => {
+                fill_scan(s, &mut self.scan);
+                Some(&*self.scan)
+            }
+            _ => None,
+        };
         let inputs = Inputs {
             t_s: frame.t_s,
             imu: self.last_imu,
@@ -191,7 +201,7 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
                 ..PilotInput::default()
             },
         };
-        let out = self.onboard.step(&inputs, scan.as_ref(), dt_s as f32);
+        let out = self.onboard.step(&inputs, scan, dt_s as f32);
         let mut log = self.log.borrow_mut();
         if log.modes.last().is_none_or(|(_, m)| *m != out.mode) {
             log.modes.push((frame.t_s, out.mode));

@@ -2,6 +2,7 @@
 
 pub mod autopilot;
 pub mod events;
+pub mod level;
 pub mod onboard;
 pub mod supervisor;
 #[cfg(test)]

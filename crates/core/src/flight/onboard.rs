@@ -7,7 +7,8 @@
 //! [`ScanMatchDelta`] is [`scan_match_delta`].
 
 use super::autopilot::{Autopilot, AutopilotConfig};
-use crate::geom::{normalize_angle, Pose2};
+use super::level::Leveller;
+use crate::geom::Pose2;
 use crate::matching::{LidarOdometry, MatchError, OdometryConfig, OdometryStep};
 use crate::msgs::{Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
 use crate::scan::Scan;
@@ -23,8 +24,8 @@ pub struct Onboard<const N: usize> {
     /// the matcher's initial guess, better than repeating the last motion when a push or a
     /// gust changes the velocity between revolutions.
     pose_at_last_scan: Option<Pose2>,
-    /// Scratch for the levelled copy of the scan being matched.
-    level: Scan<N>,
+    /// The levelled copy of the scan being matched.
+    leveller: Leveller<N>,
 }
 
 impl<const N: usize> Onboard<N> {
@@ -34,7 +35,7 @@ impl<const N: usize> Onboard<N> {
             autopilot: Autopilot::new(autopilot),
             rejected_points: 0,
             pose_at_last_scan: None,
-            level: Scan::new(0.0),
+            leveller: Leveller::default(),
         }
     }
 
@@ -55,47 +56,14 @@ impl<const N: usize> Onboard<N> {
             let pose = Pose2::new(e.position_m[0], e.position_m[1], e.yaw_rad);
             let prior = self.pose_at_last_scan.map(|before| before.between(pose));
             self.pose_at_last_scan = Some(pose);
-            level_scan(scan, e.roll_rad, e.pitch_rad, &mut self.level);
-            let step = self.odometry.update(&self.level, prior);
+            let level = self.leveller.level(scan, e.roll_rad, e.pitch_rad);
+            let step = self.odometry.update(level, prior);
             if let OdometryStep::Matched { result, .. } = &step {
                 self.rejected_points += u64::from(result.quality.rejected_dynamic);
             }
             inputs.scan_match = Some(scan_match_delta(&step, scan.stamp_s));
         }
         self.autopilot.step(&inputs, dt)
-    }
-}
-
-/// Projects a scan taken with the vehicle tilted onto the horizontal plane: a tilted scan plane
-/// meets vertical walls further away than the horizontal distance (by 1/cos(tilt)), which the
-/// matcher would read as motion. Each hit is rotated by roll and pitch (ZYX, FLU) and its
-/// horizontal range and bearing kept; bearings stay continuous with the original ones, so the
-/// beam order is preserved.
-pub fn level_scan<const N: usize>(
-    scan: &Scan<N>,
-    roll_rad: f32,
-    pitch_rad: f32,
-    out: &mut Scan<N>,
-) {
-    out.clear(scan.stamp_s);
-    let (sr, cr) = libm::sincosf(if roll_rad.is_finite() { roll_rad } else { 0.0 });
-    let (sp, cp) = libm::sincosf(if pitch_rad.is_finite() {
-        pitch_rad
-    } else {
-        0.0
-    });
-    for beam in scan.beams() {
-        let mut b = *beam;
-        if b.valid {
-            let (sa, ca) = libm::sincosf(b.angle_rad);
-            let (px, py) = (b.range_m * ca, b.range_m * sa);
-            let x = px * cp + py * sr * sp;
-            let y = py * cr;
-            b.range_m = libm::hypotf(x, y);
-            b.angle_rad += normalize_angle(libm::atan2f(y, x) - b.angle_rad);
-        }
-        // The output has the input's capacity, so this cannot fail.
-        let _ = out.push(b);
     }
 }
 
@@ -206,33 +174,6 @@ mod tests {
             },
         };
         assert!(!scan_match_delta(&blind, 4.0).becomes_reference);
-    }
-
-    #[test]
-    fn levelling_undoes_the_tilt_of_the_scan_plane() {
-        let (roll, pitch) = (0.1f32, -0.2f32);
-        // A wall 2 m ahead, seen level and seen tilted: the tilted plane meets it at 2/cos.
-        let mut tilted = Scan::<360>::new(0.0);
-        tilted
-            .push(crate::scan::Beam::new(0.0, 2.0 / libm::cosf(pitch)))
-            .unwrap();
-        tilted
-            .push(crate::scan::Beam::new(
-                core::f32::consts::FRAC_PI_2,
-                1.5 / libm::cosf(roll),
-            ))
-            .unwrap();
-        tilted.push(crate::scan::Beam::invalid(3.0)).unwrap();
-        let mut out = Scan::new(0.0);
-        level_scan(&tilted, roll, pitch, &mut out);
-        let b = out.beams();
-        assert!(
-            (b[0].range_m - 2.0).abs() < 1e-4 && b[0].angle_rad.abs() < 1e-5,
-            "{:?}",
-            b[0]
-        );
-        assert!((b[1].range_m - 1.5).abs() < 0.02, "{:?}", b[1]);
-        assert!(!b[2].valid && b[2].angle_rad == 3.0);
     }
 
     #[test]
