@@ -55,6 +55,68 @@ impl Default for AttitudeConfig {
     }
 }
 
+/// Roll and pitch (ZYX Euler, FLU) with their sines and cosines. The filter works out this once
+/// per change of its attitude; the prediction, the measurement models and the controllers read
+/// it at every step, and taking Euler angles out of the quaternion each time cost more than the
+/// filter's own update.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tilt {
+    pub roll_rad: f32,
+    pub pitch_rad: f32,
+    pub sin_roll: f32,
+    pub cos_roll: f32,
+    pub sin_pitch: f32,
+    pub cos_pitch: f32,
+}
+
+impl Tilt {
+    pub const LEVEL: Self = Self {
+        roll_rad: 0.0,
+        pitch_rad: 0.0,
+        sin_roll: 0.0,
+        cos_roll: 1.0,
+        sin_pitch: 0.0,
+        cos_pitch: 1.0,
+    };
+
+    pub fn from_angles(roll_rad: f32, pitch_rad: f32) -> Self {
+        let (sin_roll, cos_roll) = libm::sincosf(roll_rad);
+        let (sin_pitch, cos_pitch) = libm::sincosf(pitch_rad);
+        Self {
+            roll_rad,
+            pitch_rad,
+            sin_roll,
+            cos_roll,
+            sin_pitch,
+            cos_pitch,
+        }
+    }
+
+    /// The tilt of a body-to-world rotation, from the third row of its matrix
+    /// (`-sin(pitch)`, `cos(pitch) sin(roll)`, `cos(pitch) cos(roll)`).
+    fn of(q: &UnitQuaternion<f32>) -> Self {
+        let (w, x, y, z) = (q.w, q.i, q.j, q.k);
+        let sin_pitch = (-2.0 * (x * z - w * y)).clamp(-1.0, 1.0);
+        let r21 = 2.0 * (y * z + w * x);
+        let r22 = 1.0 - 2.0 * (x * x + y * y);
+        let cos_pitch = libm::sqrtf(r21 * r21 + r22 * r22);
+        let roll_rad = libm::atan2f(r21, r22);
+        let (sin_roll, cos_roll) = if cos_pitch > 1e-6 {
+            (r21 / cos_pitch, r22 / cos_pitch)
+        } else {
+            libm::sincosf(roll_rad)
+        };
+        Self {
+            roll_rad,
+            pitch_rad: libm::asinf(sin_pitch),
+            sin_roll,
+            cos_roll,
+            sin_pitch,
+            cos_pitch: cos_pitch.min(1.0),
+        }
+    }
+}
+
 /// Why a sample was not used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AttitudeError {
@@ -67,6 +129,8 @@ pub enum AttitudeError {
 pub struct AttitudeFilter {
     pub config: AttitudeConfig,
     rotation: UnitQuaternion<f32>,
+    /// The tilt of `rotation`, kept up to date with it.
+    tilt: Tilt,
     bias_rad_s: Vector3<f32>,
     /// Sum of the accelerometer samples of the initial alignment, and the time they span (s).
     align_sum: Vector3<f32>,
@@ -78,6 +142,7 @@ impl AttitudeFilter {
         Self {
             config,
             rotation: UnitQuaternion::identity(),
+            tilt: Tilt::LEVEL,
             bias_rad_s: Vector3::zeros(),
             align_sum: Vector3::zeros(),
             aligned_s: 0.0,
@@ -86,8 +151,17 @@ impl AttitudeFilter {
 
     /// Roll and pitch (ZYX Euler, FLU), radians.
     pub fn roll_pitch(&self) -> (f32, f32) {
-        let (roll, pitch, _) = self.rotation.euler_angles();
-        (roll, pitch)
+        (self.tilt.roll_rad, self.tilt.pitch_rad)
+    }
+
+    /// Roll and pitch with their sines and cosines.
+    pub fn tilt(&self) -> &Tilt {
+        &self.tilt
+    }
+
+    fn set_rotation(&mut self, rotation: UnitQuaternion<f32>) {
+        self.rotation = rotation;
+        self.tilt = Tilt::of(&rotation);
     }
 
     /// The gyro reading with the estimated bias removed (rad/s).
@@ -111,7 +185,7 @@ impl AttitudeFilter {
             s * error[0] + c * error[1],
             0.0,
         );
-        self.rotation = UnitQuaternion::from_scaled_axis(axis) * self.rotation;
+        self.set_rotation(UnitQuaternion::from_scaled_axis(axis) * self.rotation);
     }
 
     /// Adds a gyro x/y bias correction (rad/s, body) estimated elsewhere (the EKF).
@@ -151,7 +225,7 @@ impl AttitudeFilter {
             self.align_sum += accel;
             self.aligned_s += dt;
             let tilt = UnitQuaternion::rotation_between(&self.align_sum, &Vector3::z());
-            self.rotation = tilt.unwrap_or_else(UnitQuaternion::identity);
+            self.set_rotation(tilt.unwrap_or_else(UnitQuaternion::identity));
             return Ok(());
         }
         if weight > 0.0 {
@@ -163,8 +237,9 @@ impl AttitudeFilter {
             self.bias_rad_s = bias.map(|b| b.clamp(-c.max_bias_rad_s, c.max_bias_rad_s));
             omega += error * c.kp_per_s;
         }
-        self.rotation *= UnitQuaternion::from_scaled_axis(omega * dt);
-        self.rotation.renormalize();
+        let mut rotation = self.rotation * UnitQuaternion::from_scaled_axis(omega * dt);
+        rotation.renormalize();
+        self.set_rotation(rotation);
         Ok(())
     }
 }
@@ -283,6 +358,29 @@ mod tests {
             roll.abs() < 1e-5 && (pitch + 0.05).abs() < 1e-4,
             "{roll} {pitch}"
         );
+    }
+
+    #[test]
+    fn tilt_agrees_with_the_euler_angles_of_the_rotation() {
+        for (roll, pitch, yaw) in [
+            (0.0, 0.0, 0.0),
+            (0.3, -0.2, 1.0),
+            (-0.5, 0.4, -2.5),
+            (0.1, 1.5, 3.0),
+        ] {
+            let t = Tilt::of(&UnitQuaternion::from_euler_angles(roll, pitch, yaw));
+            let expected = Tilt::from_angles(roll, pitch);
+            for (got, want) in [
+                (t.roll_rad, roll),
+                (t.pitch_rad, pitch),
+                (t.sin_roll, expected.sin_roll),
+                (t.cos_roll, expected.cos_roll),
+                (t.sin_pitch, expected.sin_pitch),
+                (t.cos_pitch, expected.cos_pitch),
+            ] {
+                assert!((got - want).abs() < 2e-3, "{t:?} vs {expected:?}");
+            }
+        }
     }
 
     #[test]

@@ -16,6 +16,7 @@
 //! rotors: on the floor the x/y specific force is gravity along a tilted floor, and a push or a
 //! collision is a force this model does not know (the innovation gate rejects it).
 
+use super::attitude::Tilt;
 use super::ekf::{ix, Ekf, Outcome, N};
 use super::imu::rotation;
 use nalgebra::{Matrix2, Matrix3, SMatrix, Vector2, Vector3};
@@ -100,19 +101,17 @@ impl DragWindow {
 
 impl Ekf {
     /// Fuses one window's mean body x/y specific force, taken at the given tilt.
-    pub fn fuse_drag(
-        &mut self,
-        c: &DragConfig,
-        specific_m_s2: [f32; 2],
-        roll: f32,
-        pitch: f32,
-    ) -> Outcome {
-        if !(c.drag_per_s > 0.0 && roll.is_finite() && pitch.is_finite()) {
+    pub fn fuse_drag(&mut self, c: &DragConfig, specific_m_s2: [f32; 2], tilt: &Tilt) -> Outcome {
+        let finite = [tilt.sin_roll, tilt.cos_roll, tilt.sin_pitch, tilt.cos_pitch]
+            .iter()
+            .all(|v| v.is_finite());
+        if !(c.drag_per_s > 0.0 && finite) {
             return Outcome::Invalid;
         }
         let k = c.drag_per_s;
         let yaw = self.x[ix::YAW];
-        let r = rotation(roll, pitch, yaw);
+        let (s, co) = libm::sincosf(yaw);
+        let r = rotation(tilt, (s, co));
         let rt = r.transpose();
         let v = self.x.fixed_rows::<3>(ix::VEL).into_owned();
         let body = rt * v;
@@ -129,8 +128,7 @@ impl Ekf {
             h[(i, ix::ACCEL_BIAS + i)] = 1.0;
         }
         // R = Rz(yaw) T with T the tilt, so d(R^T v)/d(yaw) = T^T d(Rz^T)/d(yaw) v.
-        let (s, co) = libm::sincosf(yaw);
-        let tilt_t = rotation(roll, pitch, 0.0).transpose();
+        let tilt_t = rotation(tilt, (0.0, 1.0)).transpose();
         let d_yaw = tilt_t * Vector3::new(-s * v.x + co * v.y, -co * v.x - s * v.y, 0.0);
         // True R = exp(phi) R: R^T v becomes R^T (v + v x phi), so d/d(phi) = R^T [v]x.
         let d_tilt = rt * Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0);
@@ -191,14 +189,14 @@ mod tests {
             let specific = [drag_accel, 0.0, GRAVITY_M_S2 / libm::cosf(tilt)];
             let step = ImuStep {
                 accel_m_s2: specific,
-                pitch_rad: pitch_est,
+                tilt: Tilt::from_angles(0.0, pitch_est),
                 ..hover_step()
             };
             f.predict(&step, dt).unwrap();
             window.add(specific, dt);
             if let Some(mean) = window.take(c.window_s) {
                 if drag {
-                    f.fuse_drag(&c, mean, 0.0, pitch_est);
+                    f.fuse_drag(&c, mean, &Tilt::from_angles(0.0, pitch_est));
                 }
                 // About world y at zero heading is pitch.
                 pitch_est += f.take_tilt_error().0[1];
@@ -238,14 +236,14 @@ mod tests {
         let mut pushed = settled();
         let before = pushed;
         assert_eq!(
-            pushed.fuse_drag(&c, [1.7, 0.0], 0.0, 0.0),
+            pushed.fuse_drag(&c, [1.7, 0.0], &Tilt::LEVEL),
             Outcome::Rejected
         );
         assert_eq!(pushed, before);
         // 1 m/s of air against the vehicle: 0.1 m/s^2.
         let mut breeze = settled();
         assert_eq!(
-            breeze.fuse_drag(&c, [-0.1, 0.0], 0.0, 0.0),
+            breeze.fuse_drag(&c, [-0.1, 0.0], &Tilt::LEVEL),
             Outcome::Accepted
         );
         assert!(breeze.state()[ix::VEL] > 0.0);
@@ -259,7 +257,7 @@ mod tests {
             ..DragConfig::default()
         };
         let before = f;
-        assert_eq!(f.fuse_drag(&c, [0.1, 0.0], 0.0, 0.0), Outcome::Invalid);
+        assert_eq!(f.fuse_drag(&c, [0.1, 0.0], &Tilt::LEVEL), Outcome::Invalid);
         assert_eq!(f, before);
     }
 }

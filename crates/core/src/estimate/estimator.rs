@@ -80,14 +80,12 @@ impl Estimator {
             self.counters.imu_faults = self.counters.imu_faults.saturating_add(1);
             return false;
         }
-        let (roll_rad, pitch_rad) = self.attitude.roll_pitch();
         let mut gyro = self.attitude.corrected_rate(imu.gyro_rad_s);
         gyro[2] = imu.gyro_rad_s[2];
         let step = ImuStep {
             accel_m_s2: imu.accel_m_s2,
             gyro_rad_s: gyro,
-            roll_rad,
-            pitch_rad,
+            tilt: *self.attitude.tilt(),
         };
         let ok = self.ekf.predict(&step, dt).is_ok();
         if ok {
@@ -108,8 +106,9 @@ impl Estimator {
             return None;
         }
         let mean = self.drag_window.take(self.config.drag.window_s)?;
-        let (roll, pitch) = self.attitude.roll_pitch();
-        let outcome = self.ekf.fuse_drag(&self.config.drag, mean, roll, pitch);
+        let outcome = self
+            .ekf
+            .fuse_drag(&self.config.drag, mean, self.attitude.tilt());
         self.counters.drag.record(outcome);
         self.feed_back_tilt();
         Some(outcome)
@@ -183,8 +182,13 @@ impl Estimator {
     fn feed_back_tilt(&mut self) {
         let heading = self.ekf.state()[ix::YAW];
         let (tilt, gyro_bias) = self.ekf.take_tilt_error();
-        self.attitude.correct_tilt(tilt, heading);
-        self.attitude.correct_bias(gyro_bias);
+        // A rejected or unrelated measurement leaves nothing to apply.
+        if tilt != [0.0; 2] {
+            self.attitude.correct_tilt(tilt, heading);
+        }
+        if gyro_bias != [0.0; 2] {
+            self.attitude.correct_bias(gyro_bias);
+        }
     }
 
     /// The estimate as the controllers and the log see it.

@@ -4,10 +4,10 @@
 //! and the EKF's yaw, plus gravity, is the acceleration; yaw advances with the Euler-rate form of
 //! the body rates. Process noise is white accelerometer and gyro noise plus bias random walks.
 
+use super::attitude::Tilt;
 use super::ekf::{ix, Ekf, N};
 use crate::geom::normalize_angle;
 use crate::msgs::GRAVITY_M_S2;
-use libm::{cosf, sinf};
 use nalgebra::{Matrix3, Vector3};
 
 /// What the prediction needs besides the raw sample: the tilt (from the attitude filter) and the
@@ -17,8 +17,7 @@ pub struct ImuStep {
     pub accel_m_s2: [f32; 3],
     /// Body rates, x and y bias-corrected by the tilt filter; z raw (the EKF owns its bias).
     pub gyro_rad_s: [f32; 3],
-    pub roll_rad: f32,
-    pub pitch_rad: f32,
+    pub tilt: Tilt,
 }
 
 /// Why a prediction was skipped (the state is unchanged).
@@ -28,11 +27,10 @@ pub enum PredictError {
     BadDt,
 }
 
-/// ZYX Euler rotation, body FLU to world.
-pub(super) fn rotation(roll: f32, pitch: f32, yaw: f32) -> Matrix3<f32> {
-    let (sr, cr) = (sinf(roll), cosf(roll));
-    let (sp, cp) = (sinf(pitch), cosf(pitch));
-    let (sy, cy) = (sinf(yaw), cosf(yaw));
+/// ZYX Euler rotation, body FLU to world, from the tilt and the heading's (sine, cosine).
+pub(super) fn rotation(tilt: &Tilt, (sy, cy): (f32, f32)) -> Matrix3<f32> {
+    let (sr, cr) = (tilt.sin_roll, tilt.cos_roll);
+    let (sp, cp) = (tilt.sin_pitch, tilt.cos_pitch);
     Matrix3::new(
         cy * cp,
         cy * sp * sr - sy * cr,
@@ -58,20 +56,22 @@ impl Ekf {
             .iter()
             .chain(imu.gyro_rad_s.iter())
             .all(|v| v.is_finite())
-            && imu.roll_rad.is_finite()
-            && imu.pitch_rad.is_finite();
+            && imu.tilt.sin_roll.is_finite()
+            && imu.tilt.cos_roll.is_finite()
+            && imu.tilt.sin_pitch.is_finite()
+            && imu.tilt.cos_pitch.is_finite();
         if !finite {
             return Err(PredictError::NonFinite);
         }
         let yaw = self.x[ix::YAW];
-        let r = rotation(imu.roll_rad, imu.pitch_rad, yaw);
+        let r = rotation(&imu.tilt, libm::sincosf(yaw));
         let bias = self.x.fixed_rows::<3>(ix::ACCEL_BIAS).into_owned();
         let specific = Vector3::from(imu.accel_m_s2) - bias;
         let world_specific = r * specific;
         let accel = world_specific - Vector3::new(0.0, 0.0, GRAVITY_M_S2);
         let v = self.x.fixed_rows::<3>(ix::VEL).into_owned();
-        let (sr, cr) = (sinf(imu.roll_rad), cosf(imu.roll_rad));
-        let cp = cosf(imu.pitch_rad).max(0.1);
+        let (sr, cr) = (imu.tilt.sin_roll, imu.tilt.cos_roll);
+        let cp = imu.tilt.cos_pitch.max(0.1);
         let rate_z = imu.gyro_rad_s[2] - self.x[ix::GYRO_Z_BIAS];
         let yaw_rate = (sr * imu.gyro_rad_s[1] + cr * rate_z) / cp;
 
@@ -192,18 +192,22 @@ pub(crate) mod tests {
         ImuStep {
             accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
             gyro_rad_s: [0.0; 3],
-            roll_rad: 0.0,
-            pitch_rad: 0.0,
+            tilt: Tilt::LEVEL,
         }
+    }
+
+    /// The rotation at a roll, pitch and yaw (rad).
+    pub(crate) fn rotation_at(roll: f32, pitch: f32, yaw: f32) -> Matrix3<f32> {
+        rotation(&Tilt::from_angles(roll, pitch), libm::sincosf(yaw))
     }
 
     #[test]
     fn rotation_is_orthonormal_and_matches_the_tilt_convention() {
-        let r = rotation(0.3, -0.2, 1.0);
+        let r = rotation_at(0.3, -0.2, 1.0);
         assert!((r * r.transpose() - Matrix3::identity()).norm() < 1e-5);
         // Positive pitch tips body z toward world +x; positive roll tips it toward -y.
-        assert!(rotation(0.0, 0.2, 0.0)[(0, 2)] > 0.0);
-        assert!(rotation(0.2, 0.0, 0.0)[(1, 2)] < 0.0);
+        assert!(rotation_at(0.0, 0.2, 0.0)[(0, 2)] > 0.0);
+        assert!(rotation_at(0.2, 0.0, 0.0)[(1, 2)] < 0.0);
     }
 
     #[test]
@@ -220,7 +224,7 @@ pub(crate) mod tests {
             }
         }
         f.p = (f.p + f.p.transpose()) * 0.5;
-        let r = rotation(0.1, -0.2, 0.7);
+        let r = rotation_at(0.1, -0.2, 0.7);
         let u = Vector3::new(0.3, -0.4, 9.9);
         let mut dense = Covariance::identity();
         for (i, j, v) in jacobian_entries(&r, &u, 1.01, 0.01) {
@@ -257,8 +261,8 @@ pub(crate) mod tests {
         let tilt: f32 = 0.1;
         // Thrust that exactly holds height at this pitch: horizontal accel g tan(tilt), forward.
         let step = ImuStep {
-            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2 / cosf(tilt)],
-            pitch_rad: tilt,
+            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2 / libm::cosf(tilt)],
+            tilt: Tilt::from_angles(0.0, tilt),
             ..hover_step()
         };
         for _ in 0..500 {
@@ -288,7 +292,7 @@ pub(crate) mod tests {
         let mut f = Ekf::new(EkfConfig::default());
         let before = f;
         let nan = ImuStep {
-            roll_rad: f32::NAN,
+            tilt: Tilt::from_angles(f32::NAN, 0.0),
             ..hover_step()
         };
         assert_eq!(f.predict(&nan, 0.002), Err(PredictError::NonFinite));
