@@ -47,6 +47,10 @@ pub struct CascadeConfig {
     /// Collective bounds, so a descent never cuts the motors and a climb leaves torque margin.
     pub min_collective: f32,
     pub max_collective: f32,
+    /// The position and velocity loops run at most this often (s); the attitude and rate loops
+    /// run every step. Loops of a few rad/s bandwidth gain nothing from the IMU's 500 Hz, and
+    /// running them there was half of the controller's cost.
+    pub outer_period_s: f32,
 }
 
 impl CascadeConfig {
@@ -123,6 +127,7 @@ impl Default for CascadeConfig {
             hover_collective: 0.35,
             min_collective: 0.05,
             max_collective: 0.9,
+            outer_period_s: 0.01,
         }
     }
 }
@@ -162,6 +167,9 @@ pub struct AttitudeTarget {
     pub pitch_rad: f32,
     pub yaw_rad: f32,
     pub collective: f32,
+    /// Vertical specific force asked for (m/s^2): gravity plus the climb loop's demand. The
+    /// collective is this, compensated for the tilt of the moment.
+    pub lift_m_s2: f32,
 }
 
 /// The state of all twelve loops.
@@ -172,6 +180,11 @@ pub struct Cascade {
     velocity: [Pid; 3],
     attitude: [Pid; 3],
     rate: [Pid; 3],
+    /// The velocity loop's last output, held between runs of the outer loops; `None` makes
+    /// the next step run them.
+    held: Option<AttitudeTarget>,
+    /// Time since the outer loops last ran (s).
+    outer_elapsed_s: f32,
 }
 
 impl Cascade {
@@ -199,6 +212,8 @@ impl Cascade {
                 Pid::new(c.rate_rp),
                 Pid::new(c.rate_yaw),
             ],
+            held: None,
+            outer_elapsed_s: 0.0,
         }
     }
 
@@ -213,10 +228,14 @@ impl Cascade {
         {
             pid.reset();
         }
+        self.held = None;
+        self.outer_elapsed_s = 0.0;
     }
 
-    /// Runs all four loops: setpoint and estimate in, mixer demand out. `integrate` false
-    /// freezes every integral (the mixer saturated last step, or the vehicle is on the ground).
+    /// Runs the four loops: setpoint and estimate in, mixer demand out. The position and
+    /// velocity loops run once `outer_period_s` has passed (over the time since they last
+    /// ran), the attitude and rate loops every call. `integrate` false freezes the integrals
+    /// that run (the mixer saturated last step, or the vehicle is on the ground).
     pub fn run(
         &mut self,
         setpoint: &CascadeSetpoint,
@@ -225,8 +244,24 @@ impl Cascade {
         dt: f32,
         integrate: bool,
     ) -> Result<Demand, PidError> {
-        let velocity_sp = self.velocity_setpoint(setpoint, state, dt)?;
-        let target = self.attitude_target(velocity_sp, setpoint.yaw_rad, state, dt, integrate)?;
+        let elapsed = self.outer_elapsed_s + dt;
+        // Half a step of slack, so rounding in the sum does not skip a period.
+        let mut target = match self.held {
+            Some(held) if elapsed + 0.5 * dt < self.config.outer_period_s => {
+                self.outer_elapsed_s = elapsed;
+                held
+            }
+            _ => {
+                let velocity_sp = self.velocity_setpoint(setpoint, state, elapsed)?;
+                let target =
+                    self.attitude_target(velocity_sp, setpoint.yaw_rad, state, elapsed, integrate)?;
+                self.held = Some(target);
+                self.outer_elapsed_s = 0.0;
+                target
+            }
+        };
+        target.yaw_rad = setpoint.yaw_rad;
+        target.collective = self.collective(target.lift_m_s2, state);
         let rate_sp = self.rate_setpoint(&target, state, dt)?;
         self.demand(&target, rate_sp, gyro_rad_s, dt, integrate)
     }
@@ -307,14 +342,21 @@ impl Cascade {
         // ZYX Euler, FLU: thrust along body z tilts to (cos(phi) sin(theta), -sin(phi)).
         let pitch = atanf(ax / lift);
         let roll = atanf(-ay * cosf(pitch) / lift);
-        let tilt = cosf(state.roll_rad) * cosf(state.pitch_rad);
-        let collective = c.hover_collective * lift / GRAVITY_M_S2 / tilt.max(0.5);
         Ok(AttitudeTarget {
             roll_rad: roll,
             pitch_rad: pitch,
             yaw_rad: yaw_sp,
-            collective: collective.clamp(c.min_collective, c.max_collective),
+            collective: self.collective(lift, state),
+            lift_m_s2: lift,
         })
+    }
+
+    /// The collective that gives `lift_m_s2` of vertical specific force at the estimated tilt.
+    fn collective(&self, lift_m_s2: f32, state: &EstimatedState) -> f32 {
+        let c = &self.config;
+        let tilt = cosf(state.roll_rad) * cosf(state.pitch_rad);
+        let collective = c.hover_collective * lift_m_s2 / GRAVITY_M_S2 / tilt.max(0.5);
+        collective.clamp(c.min_collective, c.max_collective)
     }
 
     /// Attitude loop: body rate setpoint (rad/s); heading error wraps to (-pi, pi].
@@ -479,6 +521,31 @@ mod tests {
         assert_eq!((t.roll_rad, t.pitch_rad), (0.0, 0.0));
         // Descending from rest: less than hover collective.
         assert!(t.collective < c.config.hover_collective);
+    }
+
+    #[test]
+    fn outer_loops_run_at_their_period_and_hold_their_output_between() {
+        let sp = hold([0.0, 0.0, 1.0]);
+        let here = level_at([0.0, 0.0, 1.0]);
+        let away = level_at([0.5, 0.0, 1.0]);
+        let dt = 0.002;
+        let mut still = Cascade::new(CascadeConfig::default());
+        let mut moved = still;
+        let step = |c: &mut Cascade, s: &EstimatedState| c.run(&sp, s, [0.0; 3], dt, true);
+        assert_eq!(step(&mut still, &here), step(&mut moved, &here));
+        // The position loop of `moved` does not see the displacement until 10 ms have passed.
+        for _ in 0..4 {
+            assert_eq!(step(&mut still, &here), step(&mut moved, &away));
+        }
+        let (a, b) = (
+            step(&mut still, &here).unwrap(),
+            step(&mut moved, &away).unwrap(),
+        );
+        assert!(b.pitch < a.pitch, "{a:?} {b:?}");
+        // After a reset the next step runs them at once.
+        moved.reset();
+        let mut fresh = Cascade::new(CascadeConfig::default());
+        assert_eq!(step(&mut fresh, &away), step(&mut moved, &away));
     }
 
     #[test]
