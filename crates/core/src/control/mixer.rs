@@ -43,6 +43,8 @@ pub struct Mixed {
 pub struct Mixer {
     /// Roll, pitch and yaw coefficient of each motor (each in {-1, 0, 1}).
     coef: [[f32; 3]; 4],
+    /// One over the sum of squares of each axis' coefficients.
+    inverse_norms: [f32; 3],
 }
 
 impl Mixer {
@@ -62,7 +64,12 @@ impl Mixer {
             c[1] = round_unit(-g.arm_dir[0] / max_x);
             c[2] = if g.spins_ccw { -1.0 } else { 1.0 };
         }
-        Self { coef }
+        let inverse_norms =
+            core::array::from_fn(|axis| 1.0 / coef.iter().map(|c| c[axis] * c[axis]).sum::<f32>());
+        Self {
+            coef,
+            inverse_norms,
+        }
     }
 
     /// Allocates a demand to the four motors (seed 002 eq. 20) with attitude-first saturation.
@@ -80,9 +87,12 @@ impl Mixer {
             pitch /= span;
             span = self.fill(&mut rp, roll, pitch, 0.0);
         }
-        let yaw = yaw_request * self.yaw_fraction(&rp, yaw_request, span);
         let mut diff = [0.0; 4];
-        self.fill(&mut diff, roll, pitch, yaw);
+        if self.fill(&mut diff, roll, pitch, yaw_request) > 1.0 {
+            // The whole yaw request does not fit beside roll and pitch: it gives way.
+            let yaw = yaw_request * self.yaw_fraction(&rp, yaw_request, span);
+            self.fill(&mut diff, roll, pitch, yaw);
+        }
         let lowest = diff.iter().fold(f32::INFINITY, |m, &v| m.min(v));
         let highest = diff.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v));
         // Attitude wins: the collective moves to wherever the differential fits in [0, 1].
@@ -109,18 +119,16 @@ impl Mixer {
     /// the allocation: the coefficient columns are orthogonal, so each axis is a projection).
     pub fn demand_of(&self, thrust_norm: &[f32; 4]) -> Demand {
         let mut sums = [0.0f32; 3];
-        let mut norms = [0.0f32; 3];
         for (c, &f) in self.coef.iter().zip(thrust_norm.iter()) {
             for axis in 0..3 {
                 sums[axis] += c[axis] * f;
-                norms[axis] += c[axis] * c[axis];
             }
         }
         Demand {
             collective: thrust_norm.iter().sum::<f32>() / 4.0,
-            roll: sums[0] / norms[0],
-            pitch: sums[1] / norms[1],
-            yaw: sums[2] / norms[2],
+            roll: sums[0] * self.inverse_norms[0],
+            pitch: sums[1] * self.inverse_norms[1],
+            yaw: sums[2] * self.inverse_norms[2],
         }
     }
 
