@@ -67,6 +67,7 @@ impl MotorModel {
         }
     }
 
+    #[inline(always)]
     fn advance(&self, r: &Rotors, command: &[f64; 4], d: &Decay) -> Rotors {
         let offset: [f64; 4] = core::array::from_fn(|i| r.motor[i] - command[i]);
         Rotors {
@@ -89,6 +90,7 @@ impl MotorModel {
     }
 
     /// dΩ_i/dt of the second stage, rad/s².
+    #[inline(always)]
     pub fn acceleration(&self, r: &Rotors) -> [f64; 4] {
         core::array::from_fn(|i| (self.max_speed * r.motor[i] - r.speed[i]) * self.inv_rotor_tau)
     }

@@ -89,6 +89,7 @@ impl Nearby {
     }
 
     /// [`Scene::cast`] for a ray of at most the reach given at construction.
+    #[inline]
     pub fn cast(
         &mut self,
         scene: &Scene,
@@ -127,7 +128,9 @@ impl Nearby {
         best.map(|w| wall_hit(w, d, best_t)).or(bound)
     }
 
-    /// Gathers the walls again if `p` has left the disc they were gathered for.
+    /// Gathers the walls again if `p` has left the disc they were gathered for. The check runs
+    /// for every beam and is inlined; the gathering, about once per 0.15 m flown, is not.
+    #[inline(always)]
     fn cover(&mut self, scene: &Scene, p: [f64; 2]) {
         if let Some(c) = self.center {
             let (dx, dy) = (p[0] - c[0], p[1] - c[1]);
@@ -135,6 +138,11 @@ impl Nearby {
                 return;
             }
         }
+        self.gather(scene, p);
+    }
+
+    #[inline(never)]
+    fn gather(&mut self, scene: &Scene, p: [f64; 2]) {
         self.center = Some(p);
         scene.walls_near(p, self.reach_m + SLACK_M, &mut self.ids);
         self.use_grid = self.ids.len() > MAX_WALLS;

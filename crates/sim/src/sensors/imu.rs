@@ -63,6 +63,7 @@ struct Sigmas {
     accel_walk: f64,
 }
 
+#[inline]
 fn gauss3(rng: &mut Rng, sigma: f64) -> Vec3 {
     Vec3::new(rng.gauss(), rng.gauss(), rng.gauss()) * sigma
 }
@@ -95,6 +96,7 @@ impl Imu {
 
     /// A sample if one is due at `t_s`. `rate` is the true body rate and `specific_force` the
     /// true body-frame specific force (acceleration minus gravity), both from the dynamics.
+    #[inline]
     pub fn sample(&mut self, t_s: f64, rate: Vec3, specific_force: Vec3) -> Option<ImuSample> {
         if t_s < self.next_s {
             return None;

@@ -183,6 +183,7 @@ impl Lidar {
 
     /// Casts every beam due at or before `t_s` from `pose`; returns the revolution when its
     /// last beam has been taken. Call once per physics step.
+    #[inline]
     pub fn sample(
         &mut self,
         t_s: f64,

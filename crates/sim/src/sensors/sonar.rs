@@ -50,6 +50,10 @@ impl Sonar {
 
     /// A reading if one is due. `origin` is the transducer, `axes` the body x, y, z axes in the
     /// world frame. No echo within range reads as the maximum (the device's behaviour).
+    ///
+    /// The runner asks at every physics step (a reading is due at 20 Hz), so this is inlined
+    /// there: see [`crate::runner`] on calls in the step loop.
+    #[inline]
     pub fn sample(
         &mut self,
         t_s: f64,
