@@ -10,6 +10,7 @@
 #![forbid(unsafe_code)]
 
 pub mod battery;
+pub mod clearance;
 pub mod disturb;
 pub mod dynamics;
 pub mod math;

@@ -10,6 +10,7 @@
 //! (BENCHMARKS.md, "Simulator"). Work done at a few hertz stays out of line.
 
 use crate::battery::{Battery, BatteryLevel};
+use crate::clearance::ClearanceWatch;
 use crate::disturb::{push_force, GustParams, Gusts, Push};
 use crate::dynamics::{BodyState, Dynamics, Forcing};
 use crate::math::{Quat, Vec3};
@@ -225,6 +226,7 @@ pub fn run(
     let hz = config.physics_hz;
     let dt = 1.0 / hz;
     let scene = Scene::new(world);
+    let mut clearance = ClearanceWatch::default();
     let mut mismatch_rng = Rng::fork(config.seed, stream::MISMATCH);
     let mismatch = core::array::from_fn(|_| 1.0 + v.motor_mismatch * mismatch_rng.gauss());
     let dynamics = Dynamics::new(v, mismatch, dt);
@@ -305,7 +307,11 @@ pub fn run(
                 g.advance(slow_every as f64 * dt);
             }
             people_at(walkers, t, &mut people);
-            let c = scene.clearance([s.position.x, s.position.y], CLEARANCE_CAP_M);
+            // Searched only when it could set a new minimum or mean a crash.
+            let floor = out.min_clearance_m.max(v.radius_m);
+            let p = [s.position.x, s.position.y];
+            let c = clearance.below(&scene, p, CLEARANCE_CAP_M, floor);
+            let c = c.unwrap_or(f64::INFINITY);
             out.min_clearance_m = out.min_clearance_m.min(c);
             if c < v.radius_m {
                 out.status = Status::Crashed {
