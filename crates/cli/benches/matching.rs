@@ -90,7 +90,9 @@ fn synthetic_pairs(beams: usize) -> Vec<(Scan<N>, Scan<N>)> {
 }
 
 /// Median and 99th percentile of the per-pair best-of-`REPEATS` time, µs, the failed pairs, and
-/// the mean Gauss-Newton passes per match (what most of the time scales with).
+/// the mean Gauss-Newton passes per match (what most of the time scales with). Never inlined, so
+/// callgrind can count only the matching: `--toggle-collect='*time_pairs*'`.
+#[inline(never)]
 fn time_pairs(kind: MatcherKind, pairs: &[(Scan<N>, Scan<N>)]) -> (f64, f64, usize, f64) {
     let mut matcher: Box<ScanMatcher<N>> = Box::new(ScanMatcher::new(MatchConfig::with_kind(kind)));
     let mut times = Vec::with_capacity(pairs.len());

@@ -76,41 +76,32 @@ pub fn associate<M: Metric, const N: usize>(
     pose: Pose2,
     gate: &PassGate,
     cfg: &MatchConfig,
-    acc: &mut M,
-    partners: Option<Partners>,
-) -> PassStats {
+    partners: Partners,
+) -> (PassStats, M) {
+    let (s, c) = (libm::sinf(pose.theta), libm::cosf(pose.theta));
+    let moved = |p: Vec2| Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
+    let points = current.points();
+    let slots = &mut partners.slots[..points.len()];
+    find_partners(reference, points, moved, pose, cfg, slots, partners.reuse);
+    // The sums in a loop of their own, with no calls in it, so they stay in registers.
     let mut stats = PassStats::default();
+    let mut acc = M::default();
     let mut hist = [0u16; HIST_BINS];
     let bin_width = gate.gate_m / HIST_BINS as f32;
     let bins_per_m = 1.0 / bin_width;
     let gate2 = gate.gate_m * gate.gate_m;
     let point_gate2 = cfg.max_correspondence_m * cfg.max_correspondence_m;
     let inv_k2 = 1.0 / (gate.kernel_m * gate.kernel_m);
-    let (s, c) = (libm::sinf(pose.theta), libm::cosf(pose.theta));
-    let mut hint = 0;
-    // Unpacked once, so the per-point work is a plain slice access.
-    let (slots, reuse) = match partners {
-        Some(ps) => (ps.slots, ps.reuse),
-        None => (&mut [][..], false),
-    };
     let max_bin = (HIST_BINS - 1) as f32;
-    for (i, &p) in current.points().iter().enumerate() {
-        let rp = Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
-        let q = rp + pose.translation();
-        let seed = slots.get(i).copied().filter(|&k| reuse && k != NO_PARTNER);
-        let k = match seed {
-            Some(k) => Some(k as usize),
-            None => reference.project(q, hint).inspect(|&k| hint = k),
-        };
-        let found =
-            k.and_then(|k| reference.nearest_in_window(q, k, cfg.search_half_window as usize));
-        if let Some(slot) = slots.get_mut(i) {
-            *slot = found.map_or(NO_PARTNER, |(j, _)| j as u16);
-        }
-        let Some((j, d2)) = found else {
+    for (&p, &j) in points.iter().zip(slots.iter()) {
+        if j == NO_PARTNER {
             continue;
-        };
-        if d2 > point_gate2 {
+        }
+        let j = j as usize;
+        let rp = moved(p);
+        let q = rp + pose.translation();
+        // Exactly the distance the search found (finite: the search skips NaN and infinity).
+        if (q - reference.point(j)).norm_squared() > point_gate2 {
             continue;
         }
         let Some((target, normal)) = M::pair(reference, j, q, cfg) else {
@@ -144,7 +135,31 @@ pub fn associate<M: Metric, const N: usize>(
         }
     }
     stats.robust_sigma = 1.4826 * histogram_median(&hist, stats.inliers, bin_width);
-    stats
+    (stats, acc)
+}
+
+/// Each point's nearest reference point (or [`NO_PARTNER`]) into `slots`: searched around the
+/// slot's old partner when `reuse`, else around the point's bearing.
+fn find_partners<const N: usize>(
+    reference: &PreparedScan<N>,
+    points: &[Vec2],
+    moved: impl Fn(Vec2) -> Vec2,
+    pose: Pose2,
+    cfg: &MatchConfig,
+    slots: &mut [u16],
+    reuse: bool,
+) {
+    let half = cfg.search_half_window as usize;
+    let mut hint = 0;
+    for (&p, slot) in points.iter().zip(slots.iter_mut()) {
+        let q = moved(p) + pose.translation();
+        let k = match *slot {
+            k if reuse && k != NO_PARTNER => Some(k as usize),
+            _ => reference.project(q, hint).inspect(|&k| hint = k),
+        };
+        let found = k.and_then(|k| reference.nearest_in_window(q, k, half));
+        *slot = found.map_or(NO_PARTNER, |(j, _)| j as u16);
+    }
 }
 
 fn histogram_median(hist: &[u16; HIST_BINS], count: u16, bin_width: f32) -> f32 {

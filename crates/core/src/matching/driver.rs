@@ -40,6 +40,7 @@ pub fn run<S: Solve, const N: usize>(
     // Partners from the last pass are good search seeds only once the pose has nearly settled:
     // an early pass can turn the scan by more beams than the search window covers.
     let mut settled = false;
+    let mut previous_step = None;
     while iterations < cfg.max_iterations.max(1) {
         let first = iterations == 0;
         let gate_m = if first {
@@ -52,25 +53,22 @@ pub fn run<S: Solve, const N: usize>(
             kernel_m: 2.0 * gate_m / cfg.gate_sigmas.max(1.0),
             dynamic_threshold_m2: dynamic.filter(|_| first),
         };
-        let mut acc = S::default();
-        let mut stats = associate(
+        let (mut stats, mut acc) = associate::<S, N>(
             reference,
             current,
             pose,
             &gate,
             cfg,
-            &mut acc,
-            Some(Partners {
+            Partners {
                 slots: &mut *partners,
                 reuse: !first && settled,
-            }),
+            },
         );
         if first && stats.rejected_dynamic as usize * 2 > current.len() {
             // Seed 000 sec. 4.2 assumes a good guess; when it rejects most of the scan the guess
             // is off, not the world. Redo the pass without it.
             dynamic = None;
-            acc = S::default();
-            stats = associate(
+            (stats, acc) = associate(
                 reference,
                 current,
                 pose,
@@ -79,11 +77,10 @@ pub fn run<S: Solve, const N: usize>(
                     ..gate
                 },
                 cfg,
-                &mut acc,
-                Some(Partners {
+                Partners {
                     slots: &mut *partners,
                     reuse: !first && settled,
-                }),
+                },
             );
         }
         if first {
@@ -113,10 +110,12 @@ pub fn run<S: Solve, const N: usize>(
         settled = step_t < SETTLED_STEP_M && step_r < SETTLED_STEP_RAD;
         pose = next;
         last = stats;
-        if step_t < cfg.convergence_m && step_r < cfg.convergence_rad {
+        let step = (step_t / cfg.convergence_m).max(step_r / cfg.convergence_rad);
+        if converged(step, previous_step) {
             status = MatchStatus::Converged;
             break;
         }
+        previous_step = Some(step);
     }
     Ok(report(
         pose,
@@ -127,6 +126,24 @@ pub fn run<S: Solve, const N: usize>(
         rejected_dynamic,
         status,
     ))
+}
+
+/// Steps shrinking by at least this factor a pass are taken as a contraction whose remaining
+/// steps can be summed; slower ones are not trusted to keep shrinking.
+const MAX_CONTRACTION: f32 = 0.5;
+
+/// Whether the iteration has converged after a step of `step` tolerances (the larger of
+/// translation over `convergence_m` and rotation over `convergence_rad`) that followed one of
+/// `previous` (none after the first pass): the step itself is within tolerance, or the steps
+/// shrink so fast that all those still to come (a geometric series at the observed ratio) add
+/// up to less than the tolerance. The second case saves the pass that would only confirm a step
+/// already below a millimetre.
+fn converged(step: f32, previous: Option<f32>) -> bool {
+    let settles = |previous: f32| {
+        let ratio = step / previous;
+        ratio < MAX_CONTRACTION && step * ratio / (1.0 - ratio) < 1.0
+    };
+    step < 1.0 || previous.is_some_and(settles)
 }
 
 /// The translation direction the pass's information does not pin down, if any.

@@ -25,7 +25,7 @@ pub use result::{MatchError, MatchQuality, MatchResult, MatchStatus, UNOBSERVED_
 
 use crate::geom::{Pose2, Vec2};
 use crate::scan::Scan;
-use associate::PassGate;
+use associate::{Partners, PassGate};
 use metrics::{PointToLineGaussNewton, PointToPointClosedForm, PointToSegmentExact};
 use recovery::SearchBox;
 
@@ -142,7 +142,7 @@ impl<const N: usize> ScanMatcher<N> {
                     cfg.paper_rate_per_point,
                     cfg.paper_iterations,
                 );
-                Self::paper_report(reference, current, motion, cfg)
+                Self::paper_report(reference, current, motion, cfg, partners)
             }
         };
         let first = attempt(guess);
@@ -189,6 +189,7 @@ impl<const N: usize> ScanMatcher<N> {
         current: &PreparedScan<N>,
         motion: Pose2,
         cfg: &MatchConfig,
+        partners: &mut [u16],
     ) -> Result<MatchResult, MatchError> {
         if !motion.is_finite() {
             return Err(MatchError::Diverged);
@@ -198,8 +199,13 @@ impl<const N: usize> ScanMatcher<N> {
             kernel_m: cfg.max_correspondence_m,
             dynamic_threshold_m2: None,
         };
-        let mut acc = PointToLineGaussNewton::default();
-        let stats = associate::associate(reference, current, motion, &gate, cfg, &mut acc, None);
+        let partners = Partners {
+            slots: partners,
+            reuse: false,
+        };
+        let (stats, _) = associate::associate::<PointToLineGaussNewton, N>(
+            reference, current, motion, &gate, cfg, partners,
+        );
         Ok(driver::report(
             motion,
             &stats,

@@ -199,6 +199,7 @@ impl<const N: usize> PreparedScan<N> {
     /// Index of the first point whose bearing is not below the bearing of `q`, searching from
     /// `hint` (queries come in angular order, so this is usually a step or two). `None` when `q`
     /// lies outside the field of view of a scan that is not a full circle.
+    #[inline]
     pub fn project(&self, q: Vec2, hint: usize) -> Option<usize> {
         self.walk(q, hint)
             .or_else(|| self.project_by_bearing(q, hint))
@@ -209,6 +210,7 @@ impl<const N: usize> PreparedScan<N> {
     /// cross product is positive) while the two are less than a half turn apart. `None` (ask
     /// [`Self::project_by_bearing`]) when the walk gets long, reaches an end of the scan, or ends
     /// between two points that are not both within a quarter turn of `q`.
+    #[inline(always)]
     fn walk(&self, q: Vec2, hint: usize) -> Option<usize> {
         let p = &self.points[..self.len];
         let mut k = hint;
@@ -228,7 +230,8 @@ impl<const N: usize> PreparedScan<N> {
     }
 
     /// [`Self::project`] from the bearing of `q` (an approximate atan2): a short walk from the
-    /// hint, or bisection.
+    /// hint, or bisection. Out of line: most queries never need it.
+    #[inline(never)]
     fn project_by_bearing(&self, q: Vec2, hint: usize) -> Option<usize> {
         if self.len == 0 {
             return None;
@@ -275,20 +278,32 @@ impl<const N: usize> PreparedScan<N> {
         }
     }
 
-    /// The nearest point to `q` among `half_window` points either side of `k`, with its squared
-    /// distance.
+    /// The nearest point to `q` among `half_window` points either side of `k` (from `k -
+    /// half_window` to `k + half_window - 1`), with its squared distance.
+    #[inline]
     pub fn nearest_in_window(&self, q: Vec2, k: usize, half_window: usize) -> Option<(usize, f32)> {
+        // The usual case, inlined into every association: the default window (3 a side) inside
+        // the scan, as a fixed-length array whose distances become straight-line code.
+        let from = k.wrapping_sub(half_window);
+        let window = self.points[..self.len].get(from..k + half_window);
+        match window.map(<&[Vec2; 6]>::try_from) {
+            Some(Ok(window)) => {
+                let d2: [f32; 6] = core::array::from_fn(|j| (window[j] - q).norm_squared());
+                argmin(d2.into_iter()).map(|(j, d2)| (from + j, d2))
+            }
+            _ => self.nearest_in_pieces(q, k, half_window),
+        }
+    }
+
+    /// [`Self::nearest_in_window`] for other window sizes and near an end of the scan: the part
+    /// inside the scan and, on a full circle, the parts that wrap.
+    #[inline(never)]
+    fn nearest_in_pieces(&self, q: Vec2, k: usize, half_window: usize) -> Option<(usize, f32)> {
         let n = self.len as isize;
         let (lo, hi) = (
             k as isize - half_window as isize,
             k as isize + half_window as isize,
         );
-        if lo >= 0 && hi <= n {
-            // The usual case: the window lies inside the scan.
-            let from = lo as usize;
-            return nearest_among(&self.points[from..hi as usize], q).map(|(j, d2)| (from + j, d2));
-        }
-        // Near an end: the part inside the scan and, on a full circle, the parts that wrap.
         let pieces = if self.full_circle {
             [(lo, hi), (n + lo, n), (0, hi - n)]
         } else {
@@ -297,7 +312,8 @@ impl<const N: usize> PreparedScan<N> {
         let mut best: Option<(usize, f32)> = None;
         for (from, to) in pieces {
             let (from, to) = (from.clamp(0, n) as usize, to.clamp(0, n) as usize);
-            if let Some((j, d2)) = nearest_among(&self.points[from..to], q) {
+            let piece = self.points[from..to].iter();
+            if let Some((j, d2)) = argmin(piece.map(|p| (*p - q).norm_squared())) {
                 if best.is_none_or(|(_, b)| d2 < b) {
                     best = Some((from + j, d2));
                 }
@@ -307,21 +323,11 @@ impl<const N: usize> PreparedScan<N> {
     }
 }
 
-/// Index and squared distance of the point in `points` nearest to `q` (the first of equals).
-fn nearest_among(points: &[Vec2], q: Vec2) -> Option<(usize, f32)> {
-    // The default window (3 a side) as a fixed-length array: the compiler unrolls the loop, which
-    // is most of the search's cost.
-    match <&[Vec2; 6]>::try_from(points) {
-        Ok(window) => argmin_distance(window.iter(), q),
-        Err(_) => argmin_distance(points.iter(), q),
-    }
-}
-
+/// Index and value of the least of `values` (the first of equals), ignoring NaN and infinity.
 #[inline(always)]
-fn argmin_distance<'a>(points: impl Iterator<Item = &'a Vec2>, q: Vec2) -> Option<(usize, f32)> {
+fn argmin(values: impl Iterator<Item = f32>) -> Option<(usize, f32)> {
     let mut best = (0, f32::INFINITY);
-    for (j, p) in points.enumerate() {
-        let d2 = (*p - q).norm_squared();
+    for (j, d2) in values.enumerate() {
         if d2 < best.1 {
             best = (j, d2);
         }
