@@ -74,6 +74,17 @@ impl Sym3 {
         }
     }
 
+    pub fn scaled(&self, k: f32) -> Sym3 {
+        Sym3 {
+            xx: k * self.xx,
+            xy: k * self.xy,
+            xt: k * self.xt,
+            yy: k * self.yy,
+            yt: k * self.yt,
+            tt: k * self.tt,
+        }
+    }
+
     /// The translation direction this information barely pins down once rotation is free (a
     /// corridor's axis), with the information along the best-pinned direction: `Some` when
     /// least over most is below `ratio`.
