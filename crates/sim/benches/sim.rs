@@ -5,14 +5,17 @@
 //! real-time factor is elements per second / 1000; for `rays` the elements are rays. `rays/*`
 //! casts each ray on its own through the scene's grid; `rays/*_scans` casts the same rays the way
 //! the lidar does, 360 beams per place through [`Nearby`], its set-up at every place included.
+//! For `dynamics` the elements are RK4 steps of the rigid body and motors alone.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use plumbline_sim::dynamics::{BodyState, Dynamics, Forcing};
 use plumbline_sim::math::Vec3;
 use plumbline_sim::nearby::Nearby;
 use plumbline_sim::plan::{Plan, PlanLimits};
 use plumbline_sim::runner::{run, Discard, Pilot, SimConfig};
 use plumbline_sim::scene::Scene;
 use plumbline_sim::sensors::lidar::LidarProfile;
+use plumbline_sim::vehicle::VehicleParams;
 use plumbline_sim::world::World;
 use std::hint::black_box;
 
@@ -28,6 +31,41 @@ fn survey(c: &mut Criterion) {
     g.throughput(Throughput::Elements(steps));
     g.bench_function("office_xv11_1khz", |b| {
         b.iter(|| run(&config, Pilot::Test(plan.clone()), &mut Discard).unwrap())
+    });
+    g.finish();
+}
+
+/// The rigid body and motors alone: 1,000 RK4 steps of 1 ms around hover, the commands changing
+/// at every step. What the survey's physics costs without sensors, pilot or bookkeeping.
+fn dynamics(c: &mut Criterion) {
+    let p = VehicleParams::f450();
+    let d = Dynamics::new(&p, [1.0, 1.02, 0.98, 1.01], 1e-3);
+    let hover = p.hover_rotor_speed() / p.max_rotor_speed_radps;
+    let start = BodyState {
+        motor: [hover; 4],
+        rotor_speed: [hover * p.max_rotor_speed_radps; 4],
+        ..BodyState::at_rest(Vec3::new(0.0, 0.0, 1.0), 0.3)
+    };
+    let mut g = c.benchmark_group("dynamics");
+    g.throughput(Throughput::Elements(1000));
+    g.bench_function("rk4_1khz", |b| {
+        b.iter(|| {
+            let mut s = start;
+            for k in 0..1000 {
+                let wobble = 0.01 * ((k % 7) as f64 - 3.0);
+                let f = Forcing {
+                    command: [
+                        hover + wobble,
+                        hover - wobble,
+                        hover + wobble,
+                        hover - wobble,
+                    ],
+                    ..Forcing::default()
+                };
+                s = d.step(black_box(&s), &f);
+            }
+            s
+        })
     });
     g.finish();
 }
@@ -90,5 +128,5 @@ fn rays(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, survey, rays);
+criterion_group!(benches, survey, dynamics, rays);
 criterion_main!(benches);
