@@ -49,6 +49,13 @@ pub struct Battery {
     pub current_a: f64,
     /// Energy drawn from the cells so far (terminal energy plus internal loss), Wh.
     pub energy_wh: f64,
+    /// Worked out once, because a draw runs at every physics step and a division costs about as
+    /// much as the rest of it: 1/(2R), state of charge per ampere-second, and the two
+    /// thresholds as pack voltages.
+    inv_2r: f64,
+    soc_per_as: f64,
+    low_v: f64,
+    critical_v: f64,
 }
 
 /// Pack state after a step.
@@ -64,7 +71,12 @@ pub enum BatteryLevel {
 impl Battery {
     pub fn new(params: BatteryParams) -> Self {
         let soc = params.initial_soc.clamp(0.0, 1.0);
+        let cells = params.cells as f64;
         let mut b = Self {
+            inv_2r: 0.5 / params.resistance_ohm,
+            soc_per_as: 1.0 / (3600.0 * params.capacity_ah),
+            low_v: params.low_cell_v * cells,
+            critical_v: params.critical_cell_v * cells,
             params,
             soc,
             voltage_v: 0.0,
@@ -97,18 +109,17 @@ impl Battery {
         } else if disc < 0.0 || self.soc <= 0.0 {
             (ocv / (2.0 * r), true)
         } else {
-            ((ocv - disc.sqrt()) / (2.0 * r), false)
+            ((ocv - disc.sqrt()) * self.inv_2r, false)
         };
         self.current_a = current;
         self.voltage_v = ocv - current * r;
-        self.soc = (self.soc - current * dt_s / (3600.0 * self.params.capacity_ah)).max(0.0);
-        self.energy_wh += ocv * current * dt_s / 3600.0;
-        let cell_v = self.voltage_v / self.params.cells as f64;
+        self.soc = (self.soc - current * dt_s * self.soc_per_as).max(0.0);
+        self.energy_wh += ocv * current * dt_s * (1.0 / 3600.0);
         if exhausted {
             BatteryLevel::Exhausted
-        } else if cell_v < self.params.critical_cell_v {
+        } else if self.voltage_v < self.critical_v {
             BatteryLevel::Critical
-        } else if cell_v < self.params.low_cell_v {
+        } else if self.voltage_v < self.low_v {
             BatteryLevel::Low
         } else {
             BatteryLevel::Ok
