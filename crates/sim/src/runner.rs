@@ -295,8 +295,10 @@ pub fn run(
     };
     let mut reference = None;
     let mut k: u64 = 0;
+    // The time of step k, worked out once per step (the end of one step is the start of the
+    // next).
+    let mut t = 0.0;
     loop {
-        let t = k as f64 / hz;
         if t >= end_s {
             break;
         }
@@ -371,7 +373,7 @@ pub fn run(
         let (position_before, velocity_before) = (s.position, s.velocity);
         s = dynamics.step(&s, &forcing);
         k += 1;
-        let t = k as f64 / hz;
+        t = k as f64 / hz;
         if !s.is_finite()
             || s.velocity.dot(s.velocity) > MAX_SPEED_MPS * MAX_SPEED_MPS
             || s.rate.dot(s.rate) > MAX_RATE_RADPS * MAX_RATE_RADPS
