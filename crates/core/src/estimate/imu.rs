@@ -99,20 +99,42 @@ impl Ekf {
         yaw_gain: f32,
         dt: f32,
     ) {
-        // F = I + G with G's 23 entries out of 324: F P F^T as P + G P, then that plus its
-        // product with G^T, is 14 times fewer multiplications than the dense products, which
-        // were the largest single cost of the closed loop.
+        // F = I + G with G's 23 entries out of 324, all in the rows of the MOVED states.
+        // B = P F^T differs from P only in the moved columns, and F P F^T = F B differs from B
+        // only in the moved rows, which by symmetry are B's moved columns except where a moved
+        // row meets a moved column. So: the moved columns of B (column operations, over
+        // contiguous memory), then the 9 x 9 block where moved meets moved. Dense products
+        // were the largest single cost of the closed loop, row operations on P the next.
         let g = jacobian_entries(r, world_specific, yaw_gain, dt);
-        let mut a = self.p;
+        // Column k of the column-major matrix.
+        let column = |k: usize| k * N..(k + 1) * N;
+        let p = self.p.as_slice();
+        let mut b = [[0.0f32; N]; MOVED.len()];
+        for (col, &k) in b.iter_mut().zip(&MOVED) {
+            col.copy_from_slice(&p[column(k)]);
+        }
         for &(i, j, v) in &g {
-            for c in 0..N {
-                a[(i, c)] += v * self.p[(j, c)];
+            for (out, x) in b[SLOT[i]].iter_mut().zip(&p[column(j)]) {
+                *out += v * x;
             }
         }
-        self.p = a;
+        let mut block: [[f32; MOVED.len()]; MOVED.len()] =
+            core::array::from_fn(|m| core::array::from_fn(|n| b[n][MOVED[m]]));
         for &(i, j, v) in &g {
-            for row in 0..N {
-                self.p[(row, i)] += v * a[(row, j)];
+            for (out, col) in block[SLOT[i]].iter_mut().zip(&b) {
+                *out += v * col[j];
+            }
+        }
+        let p = self.p.as_mut_slice();
+        for (col, &k) in b.iter().zip(&MOVED) {
+            p[column(k)].copy_from_slice(col);
+            for (row, &x) in col.iter().enumerate() {
+                p[row * N + k] = x;
+            }
+        }
+        for (row, &i) in block.iter().zip(&MOVED) {
+            for (&x, &k) in row.iter().zip(&MOVED) {
+                p[k * N + i] = x;
             }
         }
 
@@ -137,6 +159,31 @@ impl Ekf {
         self.p[(ix::GYRO_XY_BIAS + 1, ix::GYRO_XY_BIAS + 1)] += qbg;
     }
 }
+
+/// The states the motion model's Jacobian moves off the identity: its entries' rows.
+const MOVED: [usize; 9] = [
+    ix::POS,
+    ix::POS + 1,
+    ix::POS + 2,
+    ix::VEL,
+    ix::VEL + 1,
+    ix::VEL + 2,
+    ix::YAW,
+    ix::TILT,
+    ix::TILT + 1,
+];
+
+/// Where each moved state sits in [`MOVED`] (0 for the others, which no Jacobian entry has
+/// as its row: `sparse_propagation_equals_the_dense_product` would fail if one did).
+const SLOT: [usize; N] = {
+    let mut slots = [0; N];
+    let mut m = 0;
+    while m < MOVED.len() {
+        slots[MOVED[m]] = m;
+        m += 1;
+    }
+    slots
+};
 
 /// Number of off-identity entries of the motion model's Jacobian.
 const JACOBIAN_ENTRIES: usize = 23;
