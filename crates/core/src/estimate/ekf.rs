@@ -210,14 +210,14 @@ impl Ekf {
         // propagation, and checking every entry each step cost more than the prediction. This
         // runs every step, so without a branch per entry: v * 0 is 0 for finite v and NaN
         // otherwise.
-        let state_finite = self.x.iter().fold(0.0f32, |sum, v| sum + v * 0.0) == 0.0;
-        let diagonal_ok = self
-            .p
-            .as_slice()
-            .iter()
-            .step_by(N + 1)
-            .fold(true, |ok, &v| ok & (0.0..f32::INFINITY).contains(&v));
-        let finite = state_finite && diagonal_ok;
+        let p = self.p.as_slice();
+        let (mut probe, mut lowest) = (0.0f32, 0.0f32);
+        for (i, x) in self.x.as_slice().iter().enumerate() {
+            let v = p[i * (N + 1)];
+            probe += x * 0.0 + v * 0.0;
+            lowest = if v < lowest { v } else { lowest };
+        }
+        let finite = probe == 0.0 && lowest >= 0.0;
         let var_xy = self.p[(ix::POS, ix::POS)].max(self.p[(ix::POS + 1, ix::POS + 1)]);
         let max = self.config.max_position_std_m;
         finite && var_xy >= 0.0 && var_xy <= max * max
