@@ -89,22 +89,28 @@ impl Pid {
         dt: f32,
         integrate: bool,
     ) -> Result<f32, PidError> {
-        if !(dt.is_finite() && dt > 0.0) {
+        // Plain comparisons and x * 0 (0 when finite, NaN when not): this runs a dozen times a
+        // step, and `is_finite` costs several integer operations per value.
+        if !(dt > 0.0 && dt < f32::INFINITY) {
             return Err(PidError::BadDt);
         }
-        if !(setpoint.is_finite() && measurement.is_finite() && feedforward.is_finite()) {
+        if setpoint * 0.0 + measurement * 0.0 + feedforward * 0.0 != 0.0 {
             return Err(PidError::NonFinite);
         }
         let c = &self.config;
         let error = setpoint - measurement;
-        if let Some(last) = self.last_measurement {
-            let raw = (measurement - last) / dt;
-            let alpha = if c.derivative_tau_s > 0.0 {
-                dt / (c.derivative_tau_s + dt)
-            } else {
-                1.0
-            };
-            self.rate += alpha * (raw - self.rate);
+        // Most loops of the cascade have no derivative or no integral; they skip that arithmetic
+        // (with kd zero the measurement rate starts from rest if kd is set later).
+        if c.kd != 0.0 {
+            if let Some(last) = self.last_measurement {
+                let raw = (measurement - last) / dt;
+                let alpha = if c.derivative_tau_s > 0.0 {
+                    dt / (c.derivative_tau_s + dt)
+                } else {
+                    1.0
+                };
+                self.rate += alpha * (raw - self.rate);
+            }
         }
         self.last_measurement = Some(measurement);
 
@@ -114,7 +120,7 @@ impl Pid {
         // error would push it further past that bound.
         let pushing_out =
             (trial >= c.output_limit && error > 0.0) || (trial <= -c.output_limit && error < 0.0);
-        if integrate && !pushing_out {
+        if integrate && !pushing_out && c.ki != 0.0 {
             let i = self.integral + c.ki * error * dt;
             self.integral = i.clamp(-c.integral_limit, c.integral_limit);
         }
@@ -241,6 +247,14 @@ mod tests {
         assert_eq!(
             pid.update(0.0, 0.0, 0.0, f32::NAN, true),
             Err(PidError::BadDt)
+        );
+        assert_eq!(
+            pid.update(0.0, 0.0, 0.0, f32::INFINITY, true),
+            Err(PidError::BadDt)
+        );
+        assert_eq!(
+            pid.update(0.0, 0.0, f32::NEG_INFINITY, 0.01, true),
+            Err(PidError::NonFinite)
         );
         assert_eq!(pid, snapshot);
     }
