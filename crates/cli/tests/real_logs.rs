@@ -224,9 +224,10 @@ fn full_mit_csail_log_lidar_only() {
     // 0.030 m: the map's keyframe moves cost MIT's near relations half a centimetre over plain
     // odometry, and unconfirmed relocalization jumps cost 1.6 cm (0.041 m).
     assert!(f(&ev, "near_trans_mean_m") < 0.036, "{ev}");
-    // The far relations measure accumulated drift, which swings by tens of cm with any change to
-    // the matcher (BENCHMARKS.md); only a gross regression should trip this.
-    assert!(f(&ev, "trans_mean_m") < 0.8, "{ev}");
+    // The far relations measure accumulated drift, which swings by several cm with any change
+    // to the matcher (0.04-0.18 m over neighbouring settings, BENCHMARKS.md); this only asks the
+    // map to beat plain scan-to-keyframe odometry (0.235 m).
+    assert!(f(&ev, "trans_mean_m") < 0.2, "{ev}");
 }
 
 #[test]

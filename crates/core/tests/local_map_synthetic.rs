@@ -3,8 +3,8 @@
 
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::matching::local_map::{
-    refine, relocalize, Declined, LineMap, LineMapConfig, MapCell, MappedOdometry, RefineConfig,
-    RefineRefusal, RelocalizeConfig, Sym3,
+    correction_is_plausible, map_age, refine, relocalize, Declined, LineMap, LineMapConfig,
+    MapCell, MappedOdometry, RefineConfig, RefineRefusal, RelocalizeConfig, Sym3,
 };
 use plumbline_core::matching::{LidarOdometry, OdometryConfig, PreparedScan};
 use plumbline_core::scan::Scan;
@@ -135,6 +135,43 @@ fn mapped_odometry_drifts_less_than_scan_to_keyframe_odometry() {
     assert!(
         worst_mapped < 0.7 * worst_plain,
         "mapped {worst_mapped} plain {worst_plain}"
+    );
+}
+
+/// A 10 cm, 2.3° correction is more than a confident matcher (1 cm, 0.1°) drifts in one keyframe,
+/// but well within what it drifts in a hundred: the walls' age decides.
+#[test]
+fn a_large_correction_counts_only_against_walls_mapped_long_ago() {
+    let world = room();
+    let mut cells = vec![MapCell::default(); 64 * 64];
+    let map = mapped(
+        &mut cells,
+        &world,
+        &[Pose2::IDENTITY, Pose2::new(1.0, 0.0, 0.5)],
+    );
+    let truth = Pose2::new(0.3, 0.2, 0.1);
+    let pts = points(&world, truth, 21);
+    let guess = Pose2::new(0.4, 0.2, 0.14);
+    assert_eq!(map_age(&map, &pts, guess, 10, 0.2), Some(10.0));
+    assert_eq!(map_age(&map, &pts, guess, 0, 0.2), Some(1.0));
+    assert_eq!(map_age(&map, &[], guess, 10, 0.2), None);
+    let refined = refine(&map, &pts, guess, weak_prior(), &RefineConfig::default()).unwrap();
+    assert!(truth.distance_to(refined.pose).0 < 0.01, "{refined:?}");
+    let matcher = Sym3 {
+        xx: 1e4,
+        yy: 1e4,
+        tt: 3e5,
+        ..Sym3::default()
+    };
+    let max_d2 = RefineConfig::default().max_correction_d2;
+    let young = correction_is_plausible(guess, refined.pose, &matcher, 1.0, max_d2);
+    assert!(
+        matches!(young, Err(RefineRefusal::Implausible { d2 }) if d2 > max_d2),
+        "{young:?}"
+    );
+    assert_eq!(
+        correction_is_plausible(guess, refined.pose, &matcher, 100.0, max_d2),
+        Ok(())
     );
 }
 

@@ -2,7 +2,9 @@
 //! aligned with the map before it is added to it.
 
 use super::cells::LineMap;
-use super::refine::{refine, RefineConfig, RefineRefusal, Refined};
+use super::refine::{
+    correction_is_plausible, map_age, refine, RefineConfig, RefineRefusal, Refined,
+};
 use super::relocalize::{relocalize, Declined, RelocalizeConfig};
 use crate::geom::Pose2;
 use crate::matching::linalg::Sym3;
@@ -137,15 +139,21 @@ impl<'m, const N: usize> MappedOdometry<'m, N> {
         let used = match relocalized {
             Some(refined) => MapUse::Relocalized(refined),
             None => {
-                let outcome = information_in_world(
-                    &result.covariance,
-                    self.refine.matcher_weight,
-                    previous_keyframe.theta,
-                )
-                .ok_or(RefineRefusal::Diverged)
-                .and_then(|information| {
-                    refine(&self.map, points, guess, information, &self.refine)
-                });
+                let outcome = information_in_world(&result.covariance, previous_keyframe.theta)
+                    .ok_or(RefineRefusal::Diverged)
+                    .and_then(|information| {
+                        let prior = information.scaled(self.refine.matcher_weight);
+                        let refined = refine(&self.map, points, guess, prior, &self.refine)?;
+                        let age = map_age(&self.map, points, guess, now, self.refine.gate_m);
+                        correction_is_plausible(
+                            guess,
+                            refined.pose,
+                            &information,
+                            age.unwrap_or(1.0),
+                            self.refine.max_correction_d2,
+                        )?;
+                        Ok(refined)
+                    });
                 match outcome {
                     Ok(refined) => MapUse::Refined(refined),
                     Err(refusal) => MapUse::Refused(refusal),
@@ -170,15 +178,15 @@ impl<'m, const N: usize> MappedOdometry<'m, N> {
 
 /// The scan matcher's information (inverse covariance of the motion in the previous keyframe's
 /// frame) re-expressed for a world-frame pose: `B Λ Bᵀ` with `B = diag(R(heading), 1)`.
-fn information_in_world(covariance: &[[f32; 3]; 3], weight: f32, heading: f32) -> Option<Sym3> {
+fn information_in_world(covariance: &[[f32; 3]; 3], heading: f32) -> Option<Sym3> {
     let m = Sym3::from_array(*covariance).inverse()?;
     let (s, c) = (libm::sinf(heading), libm::cosf(heading));
     Some(Sym3 {
-        xx: weight * (c * c * m.xx - 2.0 * c * s * m.xy + s * s * m.yy),
-        xy: weight * (c * s * (m.xx - m.yy) + (c * c - s * s) * m.xy),
-        yy: weight * (s * s * m.xx + 2.0 * c * s * m.xy + c * c * m.yy),
-        xt: weight * (c * m.xt - s * m.yt),
-        yt: weight * (s * m.xt + c * m.yt),
-        tt: weight * m.tt,
+        xx: (c * c * m.xx - 2.0 * c * s * m.xy + s * s * m.yy),
+        xy: (c * s * (m.xx - m.yy) + (c * c - s * s) * m.xy),
+        yy: (s * s * m.xx + 2.0 * c * s * m.xy + c * c * m.yy),
+        xt: (c * m.xt - s * m.yt),
+        yt: (s * m.xt + c * m.yt),
+        tt: m.tt,
     })
 }

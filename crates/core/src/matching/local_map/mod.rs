@@ -10,5 +10,5 @@ mod relocalize;
 pub use crate::matching::linalg::Sym3;
 pub use cells::{CellLine, LineMap, LineMapConfig, LineMapError, MapCell};
 pub use mapped::{MapUse, MappedOdometry, MappedStep};
-pub use refine::{refine, RefineConfig, RefineRefusal, Refined};
+pub use refine::{correction_is_plausible, map_age, refine, RefineConfig, RefineRefusal, Refined};
 pub use relocalize::{relocalize, Declined, RelocalizeConfig, SearchScores};

@@ -38,6 +38,11 @@ pub struct RefineConfig {
     /// move a keyframe, at 0.001 and below the map alone decides and wrong alignments creep in
     /// (measured on the Intel and MIT logs, BENCHMARKS.md).
     pub matcher_weight: f32,
+    /// Largest squared Mahalanobis distance from the guess to the refined pose, under the scan
+    /// matcher's own covariance times the age of the walls met ([`correction_is_plausible`]).
+    /// Far above a chi-square quantile because that covariance is about a hundred times too
+    /// confident (see `matcher_weight`); 100-500 all served on the logs (BENCHMARKS.md).
+    pub max_correction_d2: f32,
 }
 
 impl Default for RefineConfig {
@@ -55,6 +60,7 @@ impl Default for RefineConfig {
             max_turn_rad: 0.1,
             min_conditioning: 0.02,
             matcher_weight: 0.01,
+            max_correction_d2: 300.0,
         }
     }
 }
@@ -69,12 +75,15 @@ pub struct Refined {
 }
 
 /// Why the map could not be used for this scan.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RefineRefusal {
     /// Too few points lie on mapped walls (new space, or the guess is far off).
     TooFewMatched { matched: u16, needed: u16 },
     /// The solution left the trust region around the guess or stopped being finite.
     Diverged,
+    /// The map would move the pose farther than the scan matcher can have drifted since the
+    /// walls it met were mapped (squared Mahalanobis distance `d2`).
+    Implausible { d2: f32 },
 }
 
 /// Aligns `points` (scan frame) with `map`, starting from `guess` (world frame).
@@ -176,4 +185,49 @@ fn nearest_line(map: &LineMap, w: Vec2, gate_m: f32) -> Option<(f32, super::cell
         .map(|line| ((w - line.mean).dot(line.normal), line))
         .filter(|(r, _)| r.abs() <= gate_m)
         .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
+}
+
+/// How many keyframes ago, on average, the walls that `points` meet at `pose` were mapped:
+/// `now` minus the mean stamp of the lines they find within `gate_m`, at least one keyframe.
+/// `None` when no point meets a wall.
+pub fn map_age(map: &LineMap, points: &[Vec2], pose: Pose2, now: u32, gate_m: f32) -> Option<f32> {
+    let (mut stamp_sum, mut met) = (0.0f32, 0u32);
+    for &p in points {
+        if let Some((_, line)) = nearest_line(map, pose.transform(p), gate_m) {
+            stamp_sum += line.mean_stamp;
+            met += 1;
+        }
+    }
+    (met > 0).then(|| (now as f32 - stamp_sum / met as f32).max(1.0))
+}
+
+/// Checks the map's correction from `guess` to `refined` against the drift the scan matcher can
+/// have made since the walls were mapped.
+///
+/// Why: each keyframe's match adds an error of about the matcher's covariance, so relative to
+/// walls mapped `age_keyframes` ago the guess is off by a random walk of covariance `age` times
+/// that. Against walls mapped a few keyframes ago the map knows little more than the matcher,
+/// and a large correction there comes from clutter in the cells, not from drift: on MIT's
+/// cluttered start such corrections of up to 0.06 rad turned the trajectory by 0.09 rad within
+/// a minute (BENCHMARKS.md). `matcher_information` is the inverse of that covariance in the
+/// world frame. Returns the squared distance when it exceeds `max_d2`.
+pub fn correction_is_plausible(
+    guess: Pose2,
+    refined: Pose2,
+    matcher_information: &Sym3,
+    age_keyframes: f32,
+    max_d2: f32,
+) -> Result<(), RefineRefusal> {
+    let d = [
+        refined.x - guess.x,
+        refined.y - guess.y,
+        normalize_angle(refined.theta - guess.theta),
+    ];
+    let m = matcher_information.mul(d);
+    let d2 = (d[0] * m[0] + d[1] * m[1] + d[2] * m[2]) / age_keyframes.max(1.0);
+    if d2 <= max_d2 {
+        Ok(())
+    } else {
+        Err(RefineRefusal::Implausible { d2 })
+    }
 }
