@@ -40,6 +40,8 @@ pub struct Estimator {
     ekf: Ekf,
     drag_window: DragWindow,
     counters: EstimatorCounters,
+    /// Time predicted since "at rest" was last fused (s).
+    since_at_rest_s: f32,
 }
 
 impl Estimator {
@@ -50,6 +52,7 @@ impl Estimator {
             ekf: Ekf::new(config.ekf),
             drag_window: DragWindow::default(),
             counters: EstimatorCounters::default(),
+            since_at_rest_s: f32::INFINITY,
         }
     }
 
@@ -90,6 +93,7 @@ impl Estimator {
         let ok = self.ekf.predict(&step, dt).is_ok();
         if ok {
             self.drag_window.add(imu.accel_m_s2, dt);
+            self.since_at_rest_s += dt;
         } else {
             self.counters.imu_faults = self.counters.imu_faults.saturating_add(1);
         }
@@ -158,9 +162,15 @@ impl Estimator {
     }
 
     /// Fuses "still on the floor", which the caller knows for a fact (disarmed, or an estimate
-    /// below the floor): a rejection means the filter is wrong, so velocity and height are
+    /// below the floor), once `at_rest.period_s` of prediction has passed since it last did
+    /// (`None` until then): a rejection means the filter is wrong, so velocity and height are
     /// reopened at once and the fact applied.
-    pub fn fuse_at_rest(&mut self) -> Outcome {
+    pub fn fuse_at_rest(&mut self) -> Option<Outcome> {
+        // A microsecond of slack, so rounding in the sum of steps does not skip a period.
+        if self.since_at_rest_s + 1e-6 < self.config.at_rest.period_s {
+            return None;
+        }
+        self.since_at_rest_s = 0.0;
         let mut outcome = self.ekf.fuse_at_rest(&self.config.at_rest);
         if self.counters.at_rest.record_gated(outcome, 1) {
             let [_, sh, sv, _] = self.config.ekf.reopen_std;
@@ -174,7 +184,7 @@ impl Estimator {
             self.counters.at_rest.record(outcome);
         }
         self.feed_back_tilt();
-        outcome
+        Some(outcome)
     }
 
     /// Moves the EKF's tilt and gyro-bias error estimates into the tilt filter (error-state
@@ -366,6 +376,23 @@ mod tests {
         let c = est.counters().sonar;
         assert_eq!((c.rejected, c.resets), (10, 1));
         assert!((est.state().position_m[2] - 1.5).abs() < 0.05);
+    }
+
+    #[test]
+    fn at_rest_is_fused_once_a_period() {
+        let mut est = Estimator::new(EstimatorConfig::default());
+        let level = ImuSample {
+            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
+            ..ImuSample::default()
+        };
+        let mut fused = 0;
+        for _ in 0..50 {
+            assert!(est.predict(&level, 0.002));
+            fused += usize::from(est.fuse_at_rest().is_some());
+        }
+        // 0.1 s at 500 Hz: the first step, then every 10 ms.
+        assert_eq!(fused, 10);
+        assert_eq!(est.counters().at_rest.accepted, 10);
     }
 
     #[test]
