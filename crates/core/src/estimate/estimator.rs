@@ -355,13 +355,18 @@ mod tests {
         assert!((2.0..8.0).contains(&mean), "mean NEES {mean}");
     }
 
+    /// What the IMU of a level vehicle standing still reads.
+    fn level_at_rest() -> ImuSample {
+        ImuSample {
+            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
+            ..ImuSample::default()
+        }
+    }
+
     #[test]
     fn a_run_of_sonar_rejections_reopens_the_height() {
         let mut est = Estimator::new(EstimatorConfig::default());
-        let level = ImuSample {
-            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
-            ..ImuSample::default()
-        };
+        let level = level_at_rest();
         // The filter thinks it is on the floor; the sonar insists on 1.5 m.
         for k in 0..20 {
             assert!(est.predict(&level, 0.002));
@@ -381,10 +386,7 @@ mod tests {
     #[test]
     fn at_rest_is_fused_once_a_period() {
         let mut est = Estimator::new(EstimatorConfig::default());
-        let level = ImuSample {
-            accel_m_s2: [0.0, 0.0, GRAVITY_M_S2],
-            ..ImuSample::default()
-        };
+        let level = level_at_rest();
         let mut fused = 0;
         for _ in 0..50 {
             assert!(est.predict(&level, 0.002));
