@@ -9,6 +9,9 @@ use crate::geom::{Pose2, Vec2};
 
 /// What a metric contributes: how it pairs a point and how it sums pairs for its solver.
 pub trait Metric: Default {
+    /// Pairs are points without a normal (point-to-point); known at compile time so the
+    /// point-to-line metrics' hot loop has no branch on it.
+    const TO_POINT: bool = false;
     /// The partner of `q` (current point in the reference frame) near reference point `j`:
     /// `(target point, unit normal)` for point-to-line, normal zero for point-to-point.
     fn pair<const N: usize>(
@@ -21,9 +24,9 @@ pub trait Metric: Default {
     fn add(&mut self, p: Vec2, q: Vec2, target: Vec2, normal: Vec2, w: f32, pose: Pose2);
 }
 
-/// Residual of a pair: distance to the line, or to the point when there is no normal.
-fn residual(q: Vec2, target: Vec2, normal: Vec2) -> f32 {
-    if normal == Vec2::ZERO {
+/// Residual of a pair: distance to the point for a point-to-point metric, else to the line.
+fn residual<M: Metric>(q: Vec2, target: Vec2, normal: Vec2) -> f32 {
+    if M::TO_POINT {
         (q - target).norm()
     } else {
         normal.dot(q - target)
@@ -92,7 +95,6 @@ pub fn associate<M: Metric, const N: usize>(
     let gate2 = gate.gate_m * gate.gate_m;
     let point_gate2 = cfg.max_correspondence_m * cfg.max_correspondence_m;
     let inv_k2 = 1.0 / (gate.kernel_m * gate.kernel_m);
-    let max_bin = (HIST_BINS - 1) as f32;
     for (&p, &j) in points.iter().zip(slots.iter()) {
         if j == NO_PARTNER {
             continue;
@@ -107,7 +109,7 @@ pub fn associate<M: Metric, const N: usize>(
         let Some((target, normal)) = M::pair(reference, j, q, cfg) else {
             continue;
         };
-        let r = residual(q, target, normal);
+        let r = residual::<M>(q, target, normal);
         let r2 = r * r;
         if gate.dynamic_threshold_m2.is_some_and(|t| r2 > t) {
             stats.rejected_dynamic += 1;
@@ -118,14 +120,15 @@ pub fn associate<M: Metric, const N: usize>(
         }
         let w = 1.0 / (1.0 + r2 * inv_k2);
         acc.add(p, q, target, normal, w, pose);
-        let bin = (r.abs() * bins_per_m).min(max_bin) as usize;
+        // |r| is within the gate, so the bin is too (but for rounding at its very edge).
+        let bin = ((r.abs() * bins_per_m) as i32).min(HIST_BINS as i32 - 1) as usize;
         hist[bin] = hist[bin].saturating_add(1);
         stats.inliers += 1;
         stats.weighted_sq_sum += w * r2;
         stats.weight_sum += w;
         stats.sq_sum += r2;
         let drp = rp.perp();
-        if normal == Vec2::ZERO {
+        if M::TO_POINT {
             stats.information.add_outer([1.0, 0.0, drp.x], w);
             stats.information.add_outer([0.0, 1.0, drp.y], w);
         } else {

@@ -218,6 +218,8 @@ pub struct PointToPointClosedForm {
 }
 
 impl Metric for PointToPointClosedForm {
+    const TO_POINT: bool = true;
+
     fn pair<const N: usize>(
         r: &PreparedScan<N>,
         j: usize,

@@ -350,37 +350,61 @@ struct FitLimits {
 fn fit_window(window: &[Vec2; WINDOW], below: usize, above: usize, lim: &FitLimits) -> LineFit {
     const M: usize = MAX_LINE_NEIGHBOURS;
     let c = window[M];
-    let (mut n, mut sx, mut sy) = (1.0f32, 0.0f32, 0.0f32);
-    let (mut sxx, mut sxy, mut syy) = (0.0f32, 0.0f32, 0.0f32);
-    for (side, reach) in [(0, below.min(M)), (1, above.min(M))] {
-        for k in 1..=reach {
-            let d = window[if side == 0 { M - k } else { M + k }] - c;
-            let d2 = d.norm_squared();
-            if d2 > lim.max2 {
-                break;
-            }
-            n += 1.0;
-            sx += d.x;
-            sy += d.y;
-            sxx += d.x * d.x;
-            sxy += d.x * d.y;
-            syy += d.y * d.y;
-            // Two neighbours a side at least, so a scan's end points still get a line.
-            if d2 >= lim.extent2 && k >= 2 {
-                break;
-            }
-        }
-    }
-    if n < 3.0 {
+    let mut m = Moments::default();
+    m.walk(window[M - below.min(M)..M].iter().rev(), c, lim);
+    m.walk(window[M + 1..=M + above.min(M)].iter(), c, lim);
+    if m.n < 2.0 {
         return LineFit::default();
     }
-    let (mx, my) = (sx / n, sy / n);
-    let (cxx, cxy, cyy) = (sxx / n - mx * mx, sxy / n - mx * my, syy / n - my * my);
+    let n = m.n + 1.0;
+    let inv_n = 1.0 / n;
+    let (mx, my) = (m.sx * inv_n, m.sy * inv_n);
+    let (cxx, cxy, cyy) = (
+        m.sxx * inv_n - mx * mx,
+        m.sxy * inv_n - mx * my,
+        m.syy * inv_n - my * my,
+    );
     let (hi, lo, normal) = sym2_eigen(cxx, cxy, cyy);
     if hi > 0.0 && lo <= lim.max_flatness * hi {
         LineFit::line(normal)
     } else {
         LineFit::default()
+    }
+}
+
+/// Sums over a fit's neighbours, relative to the centre point (which adds nothing but a count).
+#[derive(Default)]
+struct Moments {
+    n: f32,
+    sx: f32,
+    sy: f32,
+    sxx: f32,
+    sxy: f32,
+    syy: f32,
+}
+
+impl Moments {
+    /// Adds the neighbours of `c` on one side, nearest first, up to a gap or until they span the
+    /// extent (two at least, so a scan's end points still get a line).
+    #[inline(always)]
+    fn walk<'a>(&mut self, side: impl Iterator<Item = &'a Vec2>, c: Vec2, lim: &FitLimits) {
+        for (k, &p) in side.enumerate() {
+            let (dx, dy) = (p.x - c.x, p.y - c.y);
+            let (xx, yy) = (dx * dx, dy * dy);
+            let d2 = xx + yy;
+            if d2 > lim.max2 {
+                break;
+            }
+            self.n += 1.0;
+            self.sx += dx;
+            self.sy += dy;
+            self.sxx += xx;
+            self.sxy += dx * dy;
+            self.syy += yy;
+            if d2 >= lim.extent2 && k >= 1 {
+                break;
+            }
+        }
     }
 }
 
