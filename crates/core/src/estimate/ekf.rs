@@ -310,13 +310,13 @@ impl Ekf {
         consider: &[usize],
         gate_nis: f32,
     ) -> Outcome {
-        if !(residual.iter().all(|v| v.is_finite())
-            && h.iter().all(|v| v.is_finite())
-            && r.iter().all(|v| v.is_finite()))
+        if !(all_finite(residual.as_slice())
+            && all_finite(h.as_slice())
+            && all_finite(r.as_slice()))
         {
             return Outcome::Invalid;
         }
-        let pht = self.p * h.transpose();
+        let pht = times_ht(&self.p, &h);
         let s = h * pht + r;
         let Some(chol) = s.cholesky() else {
             return Outcome::Invalid;
@@ -336,11 +336,31 @@ impl Ekf {
         // Joseph form (I - KH) P (I - KH)^T + K R K^T, multiplied out through the N x M factors
         // (B = P - K (H P), then B - (B H^T) K^T): the same products without the N x N ones.
         let b = self.p - k * pht.transpose();
-        self.p = b - (b * h.transpose()) * k.transpose() + k * r * k.transpose();
+        self.p = b - times_ht(&b, &h) * k.transpose() + k * r * k.transpose();
         self.p = (self.p + self.p.transpose()) * 0.5;
         self.x[ix::YAW] = crate::geom::normalize_angle(self.x[ix::YAW]);
         Outcome::Accepted
     }
+}
+
+/// True when no value is NaN or infinite (v * 0 is 0 for finite v and NaN otherwise).
+fn all_finite(values: &[f32]) -> bool {
+    values.iter().fold(0.0f32, |sum, v| sum + v * 0.0) == 0.0
+}
+
+/// `m h^T`, visiting only the non-zero entries of `h`: a measurement sees a few of the N
+/// states, and the dense products were most of an update's cost.
+fn times_ht<const M: usize>(m: &Covariance, h: &SMatrix<f32, M, N>) -> SMatrix<f32, N, M> {
+    let mut out = SMatrix::<f32, N, M>::zeros();
+    for state in 0..N {
+        for row in 0..M {
+            let v = h[(row, state)];
+            if v != 0.0 {
+                out.column_mut(row).axpy(v, &m.column(state), 1.0);
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -429,6 +449,21 @@ mod tests {
         g.p[(ix::VEL, ix::POS)] = 1e-3;
         g.update(SVector::<f32, 1>::new(0.1), h, r);
         assert!(g.x[ix::POS] > 0.01, "{}", g.x[ix::POS]);
+    }
+
+    #[test]
+    fn the_sparse_product_equals_the_dense_one() {
+        let mut p = Covariance::zeros();
+        for i in 0..N {
+            for j in 0..N {
+                p[(i, j)] = 0.1 + (i * N + j) as f32 * 0.01;
+            }
+        }
+        let mut h = SMatrix::<f32, 2, N>::zeros();
+        h[(0, ix::VEL)] = -0.7;
+        h[(0, ix::YAW)] = 0.2;
+        h[(1, ix::ACCEL_BIAS + 1)] = 1.0;
+        assert!((times_ht(&p, &h) - p * h.transpose()).abs().max() < 1e-6);
     }
 
     #[test]
