@@ -5,6 +5,11 @@ use libm::{cosf, sinf, sqrtf};
 /// Wraps an angle into (-pi, pi], the project's one angle convention.
 pub fn normalize_angle(a: f32) -> f32 {
     use core::f32::consts::PI;
+    // Already wrapped (the usual case: headings and their small differences, every step of
+    // the flight loop): returned as it is, which is what the remainder gives, without one.
+    if a > -PI && a <= PI {
+        return a;
+    }
     if !a.is_finite() {
         return a;
     }
