@@ -6,7 +6,8 @@ use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::Args;
 use plumbline_core::geom::Pose2;
 use plumbline_core::matching::local_map::{
-    LineMap, LineMapConfig, MapCell, MapUse, MappedOdometry, RefineConfig, RelocalizeConfig,
+    LineMap, LineMapConfig, MapCell, MapUse, MappedOdometry, RefineConfig, RefineRefusal,
+    RelocalizeConfig,
 };
 use plumbline_core::matching::{
     LidarOdometry, MatchConfig, MatcherKind, OdometryConfig, OdometryStep,
@@ -103,6 +104,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
         Odometer::Plain(Box::new(LidarOdometry::new(config)))
     };
     let (mut map_refined, mut map_refused, mut map_relocalized) = (0usize, 0usize, 0usize);
+    let mut map_implausible = 0usize;
     let bar = progress(log.scans.len() as u64, "odometry");
     let mut times_us = Vec::with_capacity(log.scans.len());
     let mut trajectory = Vec::with_capacity(log.scans.len());
@@ -131,7 +133,10 @@ pub fn run(args: OdometryArgs) -> CliResult {
         match map_use {
             Some(MapUse::Refined(_)) => map_refined += 1,
             Some(MapUse::Relocalized(_)) => map_relocalized += 1,
-            Some(MapUse::Refused(_)) => map_refused += 1,
+            Some(MapUse::Refused(refusal)) => {
+                map_refused += 1;
+                map_implausible += matches!(refusal, RefineRefusal::Implausible { .. }) as usize;
+            }
             _ => {}
         }
         match step {
@@ -190,6 +195,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
         "local_map": use_map,
         "map_aligned_keyframes": map_refined,
         "map_refused_keyframes": map_refused,
+        "map_implausible_keyframes": map_implausible,
         "map_relocalized_keyframes": map_relocalized,
         "non_monotonic_scans": log.stats.non_monotonic_scans,
         "bad_lines": log.stats.bad_lines,
