@@ -128,20 +128,17 @@ pub fn run<S: Solve, const N: usize>(
     ))
 }
 
-/// Steps shrinking by at least this factor a pass are taken as a contraction whose remaining
-/// steps can be summed; slower ones are not trusted to keep shrinking.
-const MAX_CONTRACTION: f32 = 0.5;
-
 /// Whether the iteration has converged after a step of `step` tolerances (the larger of
 /// translation over `convergence_m` and rotation over `convergence_rad`) that followed one of
 /// `previous` (none after the first pass): the step itself is within tolerance, or the steps
 /// shrink so fast that all those still to come (a geometric series at the observed ratio) add
-/// up to less than the tolerance. The second case saves the pass that would only confirm a step
-/// already below a millimetre.
+/// up to less than the tolerance, which a step of one tolerance or more passes only at ratios
+/// below one half. The second case saves the pass that would only confirm a step already below
+/// a millimetre.
 fn converged(step: f32, previous: Option<f32>) -> bool {
     let settles = |previous: f32| {
         let ratio = step / previous;
-        ratio < MAX_CONTRACTION && step * ratio / (1.0 - ratio) < 1.0
+        ratio < 1.0 && step * ratio / (1.0 - ratio) < 1.0
     };
     step < 1.0 || previous.is_some_and(settles)
 }
@@ -230,5 +227,30 @@ fn covariance(stats: &PassStats, degenerate: Option<Vec2>, s2: f32) -> [[f32; 3]
                 [0.0, 0.0, var_rot],
             ]
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::converged;
+
+    #[test]
+    fn a_step_within_tolerance_converges_on_any_pass() {
+        assert!(converged(0.9, None));
+        assert!(converged(0.9, Some(0.95)));
+    }
+
+    #[test]
+    fn a_larger_step_converges_only_when_the_steps_to_come_sum_within_tolerance() {
+        // First pass: nothing to extrapolate from.
+        assert!(!converged(2.0, None));
+        // Ratio 0.1: the steps still to come sum to about 0.22 tolerances.
+        assert!(converged(2.0, Some(20.0)));
+        // Ratio 0.3: they sum to about 1.3 tolerances.
+        assert!(!converged(3.0, Some(10.0)));
+        // Ratio 0.67: they sum to 4 tolerances.
+        assert!(!converged(2.0, Some(3.0)));
+        // A growing step is no contraction (its series has no sum).
+        assert!(!converged(2.0, Some(1.5)));
     }
 }
