@@ -156,11 +156,12 @@ fn fill_scan<const N: usize>(s: &LidarScan, scan: &mut Scan<N>) {
     scan.clear(s.stamp_s);
     for (k, (&r, &ok)) in s.ranges_m.iter().zip(&s.valid).take(N).enumerate() {
         let angle = (s.start_angle_rad + s.increment_rad * k as f64) as f32;
-        let beam = if ok {
+        let mut beam = if ok {
             Beam::new(angle, r)
         } else {
             Beam::invalid(angle)
         };
+        beam.time_offset_s = (s.beam_dt_s * k as f64) as f32;
         // At most N beams are taken (and `new` checked the profile), so the scan cannot be full.
         let _ = scan.push(beam);
     }

@@ -1,4 +1,5 @@
-//! Levelling: a scan taken with the vehicle tilted, projected onto the horizontal plane.
+//! Levelling: a scan taken with the vehicle tilted, projected onto the horizontal plane, and
+//! de-skewed to mid-revolution ([`super::sweep`]) in the same pass over the beams.
 //!
 //! A tilted scan plane meets vertical walls further away than the horizontal distance (by
 //! 1/cos(tilt)), which the matcher would read as motion. Each hit is rotated by roll and pitch
@@ -11,6 +12,7 @@
 //! recomputed where an angle changed), and the bearing change, which is of the order of the
 //! tilt squared, is a short arctangent series.
 
+use super::sweep::{Sweep, SweepMotion};
 use crate::scan::Scan;
 
 /// The levelled copy of the scan being matched, and the beam directions it was made with.
@@ -33,12 +35,24 @@ impl<const N: usize> Default for Leveller<N> {
 }
 
 impl<const N: usize> Leveller<N> {
-    /// Levels `scan` for a vehicle at `roll_rad`, `pitch_rad` (non-finite tilts count as level)
-    /// and returns the levelled scan. Invalid beams are copied unchanged.
-    pub fn level(&mut self, scan: &Scan<N>, roll_rad: f32, pitch_rad: f32) -> &Scan<N> {
+    /// Levels `scan` for a vehicle at `roll_rad`, `pitch_rad` (non-finite tilts count as level),
+    /// de-skews it for `motion` when its beams carry their times, and returns the result.
+    /// Invalid beams are copied unchanged.
+    pub fn level(
+        &mut self,
+        scan: &Scan<N>,
+        roll_rad: f32,
+        pitch_rad: f32,
+        motion: SweepMotion,
+    ) -> &Scan<N> {
         let finite_or_level = |a: f32| if a.is_finite() { a } else { 0.0 };
         let (sr, cr) = libm::sincosf(finite_or_level(roll_rad));
         let (sp, cp) = libm::sincosf(finite_or_level(pitch_rad));
+        let beams = scan.beams();
+        let sweep = match (beams.first(), beams.last()) {
+            (Some(a), Some(b)) => Sweep::new(motion, a.time_offset_s, b.time_offset_s),
+            _ => None,
+        };
         self.level.clear(scan.stamp_s);
         for (k, beam) in scan.beams().iter().enumerate() {
             let mut b = *beam;
@@ -53,6 +67,10 @@ impl<const N: usize> Leveller<N> {
                 let y = sa * cr;
                 b.range_m *= libm::sqrtf(x * x + y * y);
                 b.angle_rad += turn_between(ca * x + sa * y, ca * y - sa * x);
+                if let Some(sweep) = &sweep {
+                    (b.range_m, b.angle_rad) =
+                        sweep.unskew(b.range_m, b.angle_rad, (sa, ca), b.time_offset_s);
+                }
             }
             // `level` has the input's capacity, so this cannot fail.
             let _ = self.level.push(b);
@@ -63,7 +81,7 @@ impl<const N: usize> Leveller<N> {
 
 /// The angle from a direction to another, given their dot and cross products (any common
 /// scale): a series where the angle is small, as levelling's always is below steep tilts.
-fn turn_between(dot: f32, cross: f32) -> f32 {
+pub(crate) fn turn_between(dot: f32, cross: f32) -> f32 {
     // Below 1/8 the series' first omitted term, q^9 / 9, is under 2e-9 rad.
     if dot > 0.0 && libm::fabsf(cross) <= 0.125 * dot {
         let q = cross / dot;
@@ -91,7 +109,9 @@ mod tests {
         tilted.push(Beam::new(FRAC_PI_2, 1.5 / cosf(roll))).unwrap();
         tilted.push(Beam::invalid(3.0)).unwrap();
         let mut leveller = Leveller::default();
-        let b = leveller.level(&tilted, roll, pitch).beams();
+        let b = leveller
+            .level(&tilted, roll, pitch, SweepMotion::default())
+            .beams();
         assert!(
             (b[0].range_m - 2.0).abs() < 1e-4 && b[0].angle_rad.abs() < 1e-5,
             "{:?}",
@@ -125,7 +145,7 @@ mod tests {
                 let angle = -3.5 + k as f32 * 0.01;
                 scan.push(Beam::new(angle, 1.0 + (k % 7) as f32)).unwrap();
             }
-            let out = leveller.level(&scan, roll, pitch);
+            let out = leveller.level(&scan, roll, pitch, SweepMotion::default());
             assert_eq!(out.stamp_s, 1.0);
             for (b, a) in out.beams().iter().zip(scan.beams()) {
                 let (range, bearing) = rotated(a.angle_rad, a.range_m, roll, pitch);
@@ -144,7 +164,9 @@ mod tests {
         for angle in [0.5f32, 2.0] {
             let mut scan = Scan::<4>::new(0.0);
             scan.push(Beam::new(angle, 3.0)).unwrap();
-            let b = leveller.level(&scan, roll, pitch).beams()[0];
+            let b = leveller
+                .level(&scan, roll, pitch, SweepMotion::default())
+                .beams()[0];
             let (range, bearing) = rotated(angle, 3.0, roll, pitch);
             assert!((b.range_m - range).abs() < 1e-5 && (b.angle_rad - bearing).abs() < 1e-5);
         }
@@ -155,7 +177,9 @@ mod tests {
         let mut leveller = Leveller::<4>::default();
         let mut scan = Scan::<4>::new(0.0);
         scan.push(Beam::new(0.7, 2.5)).unwrap();
-        let b = leveller.level(&scan, f32::NAN, f32::INFINITY).beams()[0];
+        let b = leveller
+            .level(&scan, f32::NAN, f32::INFINITY, SweepMotion::default())
+            .beams()[0];
         assert!((b.range_m - 2.5).abs() < 1e-6 && (b.angle_rad - 0.7).abs() < 1e-6);
     }
 }

@@ -5,6 +5,7 @@ pub mod events;
 pub mod level;
 pub mod onboard;
 pub mod supervisor;
+pub mod sweep;
 #[cfg(test)]
 mod test_vehicle;
 #[cfg(test)]

@@ -8,9 +8,10 @@
 
 use super::autopilot::{Autopilot, AutopilotConfig};
 use super::level::Leveller;
+use super::sweep::SweepMotion;
 use crate::geom::Pose2;
 use crate::matching::{LidarOdometry, MatchError, OdometryConfig, OdometryStep};
-use crate::msgs::{Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
+use crate::msgs::{EstimatedState, Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
 use crate::scan::Scan;
 
 /// Lidar odometry plus autopilot, for scans of up to `N` beams.
@@ -56,7 +57,9 @@ impl<const N: usize> Onboard<N> {
             let pose = Pose2::new(e.position_m[0], e.position_m[1], e.yaw_rad);
             let prior = self.pose_at_last_scan.map(|before| before.between(pose));
             self.pose_at_last_scan = Some(pose);
-            let level = self.leveller.level(scan, e.roll_rad, e.pitch_rad);
+            let level =
+                self.leveller
+                    .level(scan, e.roll_rad, e.pitch_rad, sweep_motion(&e, &inputs));
             let step = self.odometry.update(level, prior);
             if let OdometryStep::Matched { result, .. } = &step {
                 self.rejected_points += u64::from(result.quality.rejected_dynamic);
@@ -64,6 +67,18 @@ impl<const N: usize> Onboard<N> {
             inputs.scan_match = Some(scan_match_delta(&step, scan.stamp_s));
         }
         self.autopilot.step(&inputs, dt)
+    }
+}
+
+/// The motion that smeared the revolution: the estimated velocity turned into the heading
+/// frame, and the gyro's yaw rate (its bias, a few mrad/s, moves a beam by well under a
+/// millimetre over a revolution).
+fn sweep_motion(e: &EstimatedState, inputs: &Inputs) -> SweepMotion {
+    let (s, c) = libm::sincosf(e.yaw_rad);
+    let [vx, vy, _] = e.velocity_m_s;
+    SweepMotion {
+        velocity_m_s: [c * vx + s * vy, c * vy - s * vx],
+        yaw_rate_rad_s: inputs.imu.gyro_rad_s[2],
     }
 }
 
