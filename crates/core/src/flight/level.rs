@@ -48,11 +48,15 @@ impl<const N: usize> Leveller<N> {
         let finite_or_level = |a: f32| if a.is_finite() { a } else { 0.0 };
         let (sr, cr) = libm::sincosf(finite_or_level(roll_rad));
         let (sp, cp) = libm::sincosf(finite_or_level(pitch_rad));
-        let beams = scan.beams();
-        let sweep = match (beams.first(), beams.last()) {
-            (Some(a), Some(b)) => Sweep::new(motion, a.time_offset_s, b.time_offset_s),
-            _ => None,
-        };
+        // Beam times need not rise with the index (the XV-11 sweeps clockwise from a point
+        // mid-scan), so the revolution's span is taken over all of them.
+        let (first_s, last_s) = scan
+            .beams()
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), b| {
+                (lo.min(b.time_offset_s), hi.max(b.time_offset_s))
+            });
+        let sweep = Sweep::new(motion, first_s, last_s);
         self.level.clear(scan.stamp_s);
         for (k, beam) in scan.beams().iter().enumerate() {
             let mut b = *beam;

@@ -111,7 +111,8 @@ mod tests {
         let (n, period) = (360, 0.2f32);
         let mid = 0.5 * period * (n - 1) as f32 / n as f32;
         for k in 0..n {
-            let t = period * k as f32 / n as f32;
+            // Times start mid-scan and wrap, as the XV-11's do.
+            let t = period * ((k + n / 2) % n) as f32 / n as f32;
             let dt = t - mid;
             let a = TAU * k as f32 / n as f32 - 3.1;
             let mut beam = Beam::new(a, cast(v[0] * dt, v[1] * dt, a + w * dt));
