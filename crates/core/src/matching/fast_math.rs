@@ -48,12 +48,12 @@ pub fn sin_cos(a: f32) -> (f32, f32) {
             + r2 * (-1.0 / 6.0
                 + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5040.0 + r2 * (1.0 / 362_880.0)))));
     let c = 1.0 + r2 * (-0.5 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40_320.0))));
-    match k & 3 {
-        0 => (s, c),
-        1 => (c, -s),
-        2 => (-s, -c),
-        _ => (-c, s),
-    }
+    // Quarter turn k: (s, c), (c, -s), (-s, -c), (-c, s). Selects and sign flips rather than a
+    // match, so a loop of calls has no branches and vectorises.
+    let odd = k & 1 != 0;
+    let (sin, cos) = if odd { (c, s) } else { (s, c) };
+    let flip = |v: f32, neg: bool| if neg { -v } else { v };
+    (flip(sin, k & 2 != 0), flip(cos, k.wrapping_add(1) & 2 != 0))
 }
 
 #[cfg(test)]

@@ -102,10 +102,17 @@ impl<const N: usize> PreparedScan<N> {
                 return Err(PrepareError::BeamsNotInAngularOrder { beam: i });
             }
             prev = bearing;
-            let (sin, cos) = sin_cos(beam.angle_rad);
-            self.points[self.len] = Vec2::new(beam.range_m * cos, beam.range_m * sin);
+            // The range waits in x for the loop below.
+            self.points[self.len] = Vec2::new(beam.range_m, 0.0);
             self.bearings[self.len] = beam.angle_rad;
             self.len += 1;
+        }
+        // Sines and cosines in a loop of their own, without branches or early exits, so the
+        // compiler evaluates the polynomials for several beams at once.
+        let valid = self.points[..self.len].iter_mut();
+        for (p, &a) in valid.zip(&self.bearings[..self.len]) {
+            let (sin, cos) = sin_cos(a);
+            *p = Vec2::new(p.x * cos, p.x * sin);
         }
         let span = if self.len > 1 {
             self.bearings[self.len - 1] - self.bearings[0]
