@@ -7,6 +7,8 @@
 //! mid-revolution frame with the estimated velocity and the gyro's yaw rate, the frame the
 //! estimator already assigns the match to (`estimate/scan_match.rs`).
 
+use crate::matching::fast_math::sin_cos;
+
 /// How the sensor moved during the revolution, in the levelled heading frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SweepMotion {
@@ -51,7 +53,7 @@ impl Sweep {
     ) -> (f32, f32) {
         let dt = time_offset_s - self.mid_s;
         let turn = self.motion.yaw_rate_rad_s * dt;
-        let (st, ct) = sin_cos_small(turn);
+        let (st, ct) = sin_cos(turn);
         // The beam's direction in the mid-revolution frame, and the sensor's offset there.
         let (ux, uy) = (cos * ct - sin * st, sin * ct + cos * st);
         let [vx, vy] = self.motion.velocity_m_s;
@@ -64,18 +66,6 @@ impl Sweep {
             angle_rad + turn + super::level::turn_between(along, across),
         )
     }
-}
-
-/// Sine and cosine by their series where the angle is small, as a revolution's turn is.
-fn sin_cos_small(a: f32) -> (f32, f32) {
-    if libm::fabsf(a) > 0.5 {
-        return libm::sincosf(a);
-    }
-    // Below 0.5 rad the first omitted terms, a^7/5040 and a^8/40320, are under 2e-6.
-    let a2 = a * a;
-    let sin = a * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0));
-    let cos = 1.0 - a2 / 2.0 * (1.0 - a2 / 12.0 * (1.0 - a2 / 30.0));
-    (sin, cos)
 }
 
 #[cfg(test)]
@@ -170,14 +160,5 @@ mod tests {
             .clone();
         let out = leveller.level(&untimed, 0.0, 0.0, moving);
         assert!(out.beams() == still.beams(), "untimed beams were moved");
-    }
-
-    #[test]
-    fn small_angle_sine_and_cosine_match_the_library() {
-        for k in -100..=100 {
-            let a = 0.006 * k as f32;
-            let (s, c) = sin_cos_small(a);
-            assert!((s - libm::sinf(a)).abs() < 2e-6 && (c - libm::cosf(a)).abs() < 2e-6);
-        }
     }
 }

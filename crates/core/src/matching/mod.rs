@@ -7,7 +7,7 @@
 mod associate;
 mod config;
 mod driver;
-mod fast_math;
+pub(crate) mod fast_math;
 mod icl_paper;
 mod linalg;
 pub mod local_map;
