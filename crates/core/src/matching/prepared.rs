@@ -22,12 +22,12 @@ pub struct LineFit {
 
 impl LineFit {
     const SCALE: f32 = i16::MAX as f32;
+    #[inline(always)]
     fn line(normal: Vec2) -> Self {
-        // Round half away from zero by hand: libm's roundf is a call per component.
-        let q = |v: f32| {
-            let v = v.clamp(-1.0, 1.0) * Self::SCALE;
-            (v + if v < 0.0 { -0.5 } else { 0.5 }) as i16
-        };
+        // Round half away from zero by hand: libm's roundf is a call per component. No clamp:
+        // the normal is a unit vector, and a component that rounds a hair past 1 still lands on
+        // i16::MAX because `as` saturates.
+        let q = |v: f32| (v * Self::SCALE + 0.5f32.copysign(v)) as i16;
         LineFit {
             nx: q(normal.x),
             ny: q(normal.y),
@@ -450,6 +450,8 @@ impl Neighbourhood {
 
     /// The line through the centre fitted to the neighbourhood (none with fewer than two
     /// neighbours, or when the spread across the line is more than the flatness limit allows).
+    /// Always inlined: as a call, the sums went through memory once per point.
+    #[inline(always)]
     fn line(&self, lim: &FitLimits) -> LineFit {
         let m = &self.m;
         if m.n < 3.0 {
