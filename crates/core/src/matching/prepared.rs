@@ -635,6 +635,29 @@ mod tests {
     }
 
     #[test]
+    fn a_ring_too_small_for_the_window_never_counts_a_point_twice() {
+        // Nine beams round a circle: each side may take at most four neighbours, so the two
+        // sides of a fit never reach the same point from both ends of the ring.
+        let mut s: Scan<16> = Scan::new(0.0);
+        for i in 0..9 {
+            s.push(Beam::new((-180.0f32 + 40.0 * i as f32).to_radians(), 0.1))
+                .unwrap();
+        }
+        let mut p: PreparedScan<16> = PreparedScan::default();
+        p.load(&s).unwrap();
+        assert!(p.full_circle);
+        let lim = FitLimits {
+            max2: 1.0,
+            extent2: 1.0,
+            max_flatness: 0.05,
+        };
+        for i in 0..p.len() {
+            assert_eq!((p.reach(i, -1, &lim), p.reach(i, 1, &lim)), (4, 4));
+        }
+        p.fit_lines(1.0, 0.05, 1.0);
+    }
+
+    #[test]
     fn out_of_order_beams_are_refused() {
         let mut s: Scan<4> = Scan::new(0.0);
         s.push(Beam::new(0.5, 1.0)).unwrap();
