@@ -22,12 +22,12 @@ pub struct LineFit {
 
 impl LineFit {
     const SCALE: f32 = i16::MAX as f32;
+    #[inline(always)]
     fn line(normal: Vec2) -> Self {
-        // Round half away from zero by hand: libm's roundf is a call per component.
-        let q = |v: f32| {
-            let v = v.clamp(-1.0, 1.0) * Self::SCALE;
-            (v + if v < 0.0 { -0.5 } else { 0.5 }) as i16
-        };
+        // Round half away from zero by hand: libm's roundf is a call per component. No clamp:
+        // the normal is a unit vector, and a component that rounds a hair past 1 still lands on
+        // i16::MAX because `as` saturates.
+        let q = |v: f32| (v * Self::SCALE + 0.5f32.copysign(v)) as i16;
         LineFit {
             nx: q(normal.x),
             ny: q(normal.y),
@@ -129,38 +129,65 @@ impl<const N: usize> PreparedScan<N> {
     /// outwards until they span `min_extent_m` (or `MAX_LINE_NEIGHBOURS` points, or a neighbour
     /// farther than `max_neighbour_m`, a gap). A spatial extent, not a beam count, is what makes
     /// the fit rise above range noise at every beam density; points on clutter or alone get none.
+    ///
+    /// Consecutive points share most of their neighbours, so the sums of one fit are carried to
+    /// the next ([`Neighbourhood`]): only the points at the window's ends are added or removed.
     pub fn fit_lines(&mut self, max_neighbour_m: f32, max_flatness: f32, min_extent_m: f32) {
         let limits = FitLimits {
             max2: max_neighbour_m * max_neighbour_m,
             extent2: min_extent_m * min_extent_m,
             max_flatness,
         };
-        const M: usize = MAX_LINE_NEIGHBOURS;
+        let mut window = Neighbourhood::default();
         for i in 0..self.len {
-            // Away from the ends the window is a plain slice; only the few points near an end
-            // need the wrap-around (or the cut) gathered by hand.
-            let interior = (i >= M && i + M < self.len)
-                .then(|| <&[Vec2; WINDOW]>::try_from(&self.points[i - M..=i + M]).ok())
-                .flatten();
-            self.lines[i] = match interior {
-                Some(window) => fit_window(window, M, M, &limits),
-                None => {
-                    let mut window = [self.points[i]; WINDOW];
-                    let mut reach = [0usize; 2];
-                    for (side, sign) in [(0, -1isize), (1, 1)] {
-                        for k in 1..=M {
-                            let Some(j) = self.neighbour(i, sign * k as isize) else {
-                                break;
-                            };
-                            window[if side == 0 { M - k } else { M + k }] = self.points[j];
-                            reach[side] = k;
-                        }
-                    }
-                    fit_window(&window, reach[0], reach[1], &limits)
-                }
-            };
+            let below = self.reach(i, -1, &limits);
+            let above = self.reach(i, 1, &limits);
+            window.slide(self, i, i as isize - below, i as isize + above);
+            self.lines[i] = window.line(&limits);
         }
         self.has_lines = true;
+    }
+
+    /// How many neighbours of point `i` on one side (`step` -1 or 1) its line fit takes: see
+    /// [`reach`]. At most `MAX_LINE_NEIGHBOURS`, never past the end of a scan that is not a full
+    /// circle, and on a full circle never so many that the two sides wrap onto each other (only
+    /// possible on a ring of fewer than `2 * MAX_LINE_NEIGHBOURS + 1` points, far too few to
+    /// match).
+    #[inline(always)]
+    fn reach(&self, i: usize, step: isize, lim: &FitLimits) -> isize {
+        const M: usize = MAX_LINE_NEIGHBOURS;
+        let c = self.points[i];
+        // Away from the ends the neighbours are a plain slice.
+        if i >= M && i + M < self.len {
+            return if step < 0 {
+                reach(self.points[i - M..i].iter().rev().copied(), c, lim)
+            } else {
+                reach(self.points[i + 1..=i + M].iter().copied(), c, lim)
+            };
+        }
+        let cap = if self.full_circle {
+            (self.len - 1) / 2
+        } else if step < 0 {
+            i
+        } else {
+            self.len - 1 - i
+        };
+        let side = (1..=cap.min(M) as isize).map(|k| self.at(i as isize + step * k));
+        reach(side, c, lim)
+    }
+
+    /// The point at unwrapped index `j`: in the scan, or (on a full circle) within a turn of it.
+    #[inline(always)]
+    fn at(&self, j: isize) -> Vec2 {
+        let n = self.len as isize;
+        let j = if j < 0 {
+            j + n
+        } else if j >= n {
+            j - n
+        } else {
+            j
+        };
+        self.points[j as usize]
     }
 
     pub fn len(&self) -> usize {
@@ -344,9 +371,6 @@ fn argmin(values: impl Iterator<Item = f32>) -> Option<(usize, f32)> {
     (best.1 < f32::INFINITY).then_some(best)
 }
 
-/// Points in a line fit's window: the centre and up to `MAX_LINE_NEIGHBOURS` a side.
-const WINDOW: usize = 2 * MAX_LINE_NEIGHBOURS + 1;
-
 /// When a neighbourhood counts as a line (squared distances, m²).
 struct FitLimits {
     max2: f32,
@@ -354,34 +378,102 @@ struct FitLimits {
     max_flatness: f32,
 }
 
-/// The line through the centre of `window` fitted to the neighbours it reaches: at most
-/// `below` and `above` a side, stopping at a gap or once the extent is spanned.
-fn fit_window(window: &[Vec2; WINDOW], below: usize, above: usize, lim: &FitLimits) -> LineFit {
-    const M: usize = MAX_LINE_NEIGHBOURS;
-    let c = window[M];
-    let mut m = Moments::default();
-    m.walk(window[M - below.min(M)..M].iter().rev(), c, lim);
-    m.walk(window[M + 1..=M + above.min(M)].iter(), c, lim);
-    if m.n < 2.0 {
-        return LineFit::default();
+/// How many of the neighbours of `c` on one side, nearest first, a line fit takes: up to a gap
+/// (a neighbour farther than the limit, left out) or until they span the extent (two at least,
+/// so a scan's end points still get a line).
+#[inline(always)]
+fn reach(side: impl Iterator<Item = Vec2>, c: Vec2, lim: &FitLimits) -> isize {
+    let mut taken = 0;
+    for p in side {
+        let d2 = (p - c).norm_squared();
+        if d2 > lim.max2 {
+            break;
+        }
+        taken += 1;
+        if d2 >= lim.extent2 && taken >= 2 {
+            break;
+        }
     }
-    let n = m.n + 1.0;
-    let inv_n = 1.0 / n;
-    let (mx, my) = (m.sx * inv_n, m.sy * inv_n);
-    let (cxx, cxy, cyy) = (
-        m.sxx * inv_n - mx * mx,
-        m.sxy * inv_n - mx * my,
-        m.syy * inv_n - my * my,
-    );
-    let (hi, lo, normal) = sym2_eigen(cxx, cxy, cyy);
-    if hi > 0.0 && lo <= lim.max_flatness * hi {
-        LineFit::line(normal)
-    } else {
-        LineFit::default()
+    taken
+}
+
+/// The points `lo..=hi` (indices unwrapped, so on a full circle they may run past either end)
+/// summed relative to the point a fit is centred on. Relative sums stay centimetre-scale, so
+/// adding and removing points in f32 loses nothing that matters; moving the centre by `d` is a
+/// closed-form update of the sums ([`Moments::recentre`]).
+struct Neighbourhood {
+    lo: isize,
+    hi: isize,
+    centre: Vec2,
+    m: Moments,
+}
+
+impl Default for Neighbourhood {
+    fn default() -> Self {
+        Self {
+            lo: 0,
+            hi: -1,
+            centre: Vec2::ZERO,
+            m: Moments::default(),
+        }
     }
 }
 
-/// Sums over a fit's neighbours, relative to the centre point (which adds nothing but a count).
+impl Neighbourhood {
+    /// Moves to the points `lo..=hi` around point `i`: removes those that left (relative to the
+    /// old centre), recentres, then adds those that entered. Ranges that do not overlap start
+    /// from zero, so a jump across a gap never subtracts metre-scale sums. Overlapping ranges
+    /// share a point within a fit's neighbour distance of both centres, so the shift is short.
+    fn slide<const N: usize>(&mut self, scan: &PreparedScan<N>, i: usize, lo: isize, hi: isize) {
+        let c = scan.points[i];
+        if self.lo > self.hi || lo > self.hi || hi < self.lo {
+            self.m = Moments::default();
+            self.centre = c;
+            (self.lo, self.hi) = (lo, lo - 1);
+        }
+        for j in self.lo..lo {
+            self.m.remove(scan.at(j) - self.centre);
+        }
+        for j in hi + 1..=self.hi {
+            self.m.remove(scan.at(j) - self.centre);
+        }
+        self.m.recentre(c - self.centre);
+        self.centre = c;
+        for j in lo..self.lo {
+            self.m.add(scan.at(j) - c);
+        }
+        for j in self.hi + 1..=hi {
+            self.m.add(scan.at(j) - c);
+        }
+        (self.lo, self.hi) = (lo, hi);
+    }
+
+    /// The line through the centre fitted to the neighbourhood (none with fewer than two
+    /// neighbours, or when the spread across the line is more than the flatness limit allows).
+    /// Always inlined: as a call, the sums went through memory once per point.
+    #[inline(always)]
+    fn line(&self, lim: &FitLimits) -> LineFit {
+        let m = &self.m;
+        if m.n < 3.0 {
+            return LineFit::default();
+        }
+        let inv_n = 1.0 / m.n;
+        let (mx, my) = (m.sx * inv_n, m.sy * inv_n);
+        let (cxx, cxy, cyy) = (
+            m.sxx * inv_n - mx * mx,
+            m.sxy * inv_n - mx * my,
+            m.syy * inv_n - my * my,
+        );
+        let (hi, lo, normal) = sym2_eigen(cxx, cxy, cyy);
+        if hi > 0.0 && lo <= lim.max_flatness * hi {
+            LineFit::line(normal)
+        } else {
+            LineFit::default()
+        }
+    }
+}
+
+/// Count, first and second moments of points relative to a centre.
 #[derive(Default)]
 struct Moments {
     n: f32,
@@ -393,27 +485,33 @@ struct Moments {
 }
 
 impl Moments {
-    /// Adds the neighbours of `c` on one side, nearest first, up to a gap or until they span the
-    /// extent (two at least, so a scan's end points still get a line).
-    #[inline(always)]
-    fn walk<'a>(&mut self, side: impl Iterator<Item = &'a Vec2>, c: Vec2, lim: &FitLimits) {
-        for (k, &p) in side.enumerate() {
-            let (dx, dy) = (p.x - c.x, p.y - c.y);
-            let (xx, yy) = (dx * dx, dy * dy);
-            let d2 = xx + yy;
-            if d2 > lim.max2 {
-                break;
-            }
-            self.n += 1.0;
-            self.sx += dx;
-            self.sy += dy;
-            self.sxx += xx;
-            self.sxy += dx * dy;
-            self.syy += yy;
-            if d2 >= lim.extent2 && k >= 1 {
-                break;
-            }
-        }
+    fn add(&mut self, d: Vec2) {
+        self.n += 1.0;
+        self.sx += d.x;
+        self.sy += d.y;
+        self.sxx += d.x * d.x;
+        self.sxy += d.x * d.y;
+        self.syy += d.y * d.y;
+    }
+
+    fn remove(&mut self, d: Vec2) {
+        self.n -= 1.0;
+        self.sx -= d.x;
+        self.sy -= d.y;
+        self.sxx -= d.x * d.x;
+        self.sxy -= d.x * d.y;
+        self.syy -= d.y * d.y;
+    }
+
+    /// The same points relative to a centre `d` further on: sum (p - d) = S1 - n d and
+    /// sum (p - d)(p - d)^T = S2 - S1 d^T - d S1^T + n d d^T.
+    fn recentre(&mut self, d: Vec2) {
+        let (sx, sy) = (self.sx, self.sy);
+        self.sxx += d.x * (self.n * d.x - 2.0 * sx);
+        self.sxy += self.n * d.x * d.y - sx * d.y - sy * d.x;
+        self.syy += d.y * (self.n * d.y - 2.0 * sy);
+        self.sx -= self.n * d.x;
+        self.sy -= self.n * d.y;
     }
 }
 
@@ -499,6 +597,64 @@ mod tests {
             let hint = (near + offset).clamp(0, p.len() as isize) as usize;
             proptest::prop_assert_eq!(p.project(q, hint), p.project_by_bearing(q, hint));
         }
+    }
+
+    proptest::proptest! {
+        /// Sums carried from point to point (ends added and removed, the centre moved in closed
+        /// form) must equal the sums of each fit's neighbourhood taken from scratch: on rings and
+        /// cut scans of walls at different ranges, so windows shrink at gaps and start over.
+        #[test]
+        fn carried_line_sums_equal_sums_from_scratch(
+            walls in proptest::collection::vec((0.3f32..8.0, 3usize..80), 1..10),
+            noise in proptest::collection::vec(-0.02f32..0.02, 360),
+            ring in proptest::bool::ANY,
+        ) {
+            let beams = if ring { 360 } else { 240 };
+            let mut s: Scan<360> = Scan::new(0.0);
+            let mut wall = walls.iter().flat_map(|&(r, n)| core::iter::repeat_n(r, n)).cycle();
+            for (i, e) in noise.iter().take(beams).enumerate() {
+                let a = (-180.0f32 + i as f32).to_radians();
+                s.push(Beam::new(a, wall.next().unwrap() + e)).unwrap();
+            }
+            let mut p: PreparedScan<360> = PreparedScan::default();
+            p.load(&s).unwrap();
+            let lim = FitLimits { max2: 0.09, extent2: 0.01, max_flatness: 0.05 };
+            let mut carried = Neighbourhood::default();
+            for i in 0..p.len() {
+                let (lo, hi) = (i as isize - p.reach(i, -1, &lim), i as isize + p.reach(i, 1, &lim));
+                carried.slide(&p, i, lo, hi);
+                let mut fresh = Neighbourhood::default();
+                fresh.slide(&p, i, lo, hi);
+                let (a, b) = (&carried.m, &fresh.m);
+                proptest::prop_assert_eq!(a.n, b.n);
+                for (x, y) in [(a.sx, b.sx), (a.sy, b.sy), (a.sxx, b.sxx), (a.sxy, b.sxy), (a.syy, b.syy)] {
+                    proptest::prop_assert!((x - y).abs() < 1e-5, "point {}: {} vs {}", i, x, y);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_ring_too_small_for_the_window_never_counts_a_point_twice() {
+        // Nine beams round a circle: each side may take at most four neighbours, so the two
+        // sides of a fit never reach the same point from both ends of the ring.
+        let mut s: Scan<16> = Scan::new(0.0);
+        for i in 0..9 {
+            s.push(Beam::new((-180.0f32 + 40.0 * i as f32).to_radians(), 0.1))
+                .unwrap();
+        }
+        let mut p: PreparedScan<16> = PreparedScan::default();
+        p.load(&s).unwrap();
+        assert!(p.full_circle);
+        let lim = FitLimits {
+            max2: 1.0,
+            extent2: 1.0,
+            max_flatness: 0.05,
+        };
+        for i in 0..p.len() {
+            assert_eq!((p.reach(i, -1, &lim), p.reach(i, 1, &lim)), (4, 4));
+        }
+        p.fit_lines(1.0, 0.05, 1.0);
     }
 
     #[test]
