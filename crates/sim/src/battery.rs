@@ -90,8 +90,9 @@ impl Battery {
     /// Open-circuit pack voltage at the present charge (linear between table points).
     pub fn open_circuit_v(&self) -> f64 {
         let x = self.soc.clamp(0.0, 1.0) * 10.0;
-        // x is non-negative, so truncation is floor (and needs no libm call).
-        let i = (x as usize).min(9);
+        // x is non-negative, so truncation is floor (and needs no libm call); through `u32`
+        // because SSE2 has no conversion to an unsigned 64-bit integer (see `nearby::sector_of`).
+        let i = (x as u32 as usize).min(9);
         let f = x - i as f64;
         let cell = CELL_OCV_V[i] + (CELL_OCV_V[i + 1] - CELL_OCV_V[i]) * f;
         cell * self.params.cells as f64

@@ -79,12 +79,16 @@ impl MotorModel {
         }
     }
 
-    /// The state half a step on, command held.
+    /// The state half a step on, command held. `#[inline]` (like [`Self::full_step`]) so that
+    /// callers in other crates, the `dynamics` benchmark among them, inline it as the runner
+    /// does: called, the benchmark timed a differently compiled step from the runner's.
+    #[inline]
     pub fn half_step(&self, r: &Rotors, command: &[f64; 4]) -> Rotors {
         self.advance(r, command, &self.half)
     }
 
     /// The state a full step on, command held.
+    #[inline]
     pub fn full_step(&self, r: &Rotors, command: &[f64; 4]) -> Rotors {
         self.advance(r, command, &self.full)
     }

@@ -48,8 +48,11 @@ fn pseudo_angle(x: f64, y: f64) -> f64 {
     }
 }
 
+/// Converted through `u32`: the value is below 64, and x86-64's SSE2 has no conversion to an
+/// unsigned 64-bit integer, so a saturating `as usize` costs about 15 instructions per beam
+/// against about 6 (same result).
 fn sector_of(x: f64, y: f64) -> usize {
-    ((pseudo_angle(x, y) * (SECTORS as f64 / 4.0)) as usize).min(SECTORS - 1)
+    ((pseudo_angle(x, y) * (SECTORS as f64 / 4.0)) as u32 as usize).min(SECTORS - 1)
 }
 
 /// Walls within reach of a sensor, binned by direction.

@@ -192,8 +192,10 @@ impl Lidar {
         people: &[Cylinder],
     ) -> Option<LidarScan> {
         let p = &self.profile;
+        // `next_beam` through u32 (it is below `beams`, whose scan it indexes): SSE2 converts
+        // only signed integers, so `usize as f64` takes five instructions, `u32 as f64` one.
         while self.next_beam < p.beams
-            && self.rev_start_s + self.next_beam as f64 * self.beam_dt <= t_s
+            && self.rev_start_s + self.next_beam as u32 as f64 * self.beam_dt <= t_s
         {
             let (c, s) = self.dirs[self.next_beam];
             let dir = pose.x_axis * c + pose.y_axis * s;
