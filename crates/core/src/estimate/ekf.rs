@@ -333,13 +333,41 @@ impl Ekf {
             k.row_mut(i).fill(0.0);
         }
         self.x += k * residual;
-        // Joseph form (I - KH) P (I - KH)^T + K R K^T, multiplied out through the N x M factors
-        // (B = P - K (H P), then B - (B H^T) K^T): the same products without the N x N ones.
-        let b = self.p - k * pht.transpose();
-        self.p = b - times_ht(&b, &h) * k.transpose() + k * r * k.transpose();
-        self.p = (self.p + self.p.transpose()) * 0.5;
+        // Joseph form (I - KH) P (I - KH)^T + K R K^T multiplied out: with U = P H^T and
+        // S = H U + R it is P - K U^T - U K^T + K S K^T for any gain (zeroed consider rows
+        // included), which is P - (K W^T + W K^T) with W = U - K S / 2. One symmetric correction
+        // of rank 2M on one triangle, mirrored: the N x N temporaries and the symmetrising pass
+        // were most of an update's cost.
+        let w = pht - k * s * 0.5;
+        subtract_symmetric_product(&mut self.p, &k, &w);
         self.x[ix::YAW] = crate::geom::normalize_angle(self.x[ix::YAW]);
         Outcome::Accepted
+    }
+}
+
+/// `p -= k w^T + w k^T`, computed on the lower triangle (down contiguous columns) and mirrored,
+/// so the result is exactly symmetric.
+fn subtract_symmetric_product<const M: usize>(
+    p: &mut Covariance,
+    k: &SMatrix<f32, N, M>,
+    w: &SMatrix<f32, N, M>,
+) {
+    let p = p.as_mut_slice();
+    for j in 0..N {
+        let column = &mut p[j * N + j..(j + 1) * N];
+        for m in 0..M {
+            let (kc, wc) = (
+                &k.as_slice()[m * N + j..(m + 1) * N],
+                &w.as_slice()[m * N + j..(m + 1) * N],
+            );
+            let (kj, wj) = (kc[0], wc[0]);
+            for ((out, &ki), &wi) in column.iter_mut().zip(kc).zip(wc) {
+                *out -= ki * wj + wi * kj;
+            }
+        }
+        for i in j + 1..N {
+            p[i * N + j] = p[j * N + i];
+        }
     }
 }
 
@@ -378,6 +406,39 @@ mod tests {
         assert_eq!(out, Outcome::Accepted);
         assert!((f.state()[ix::POS] - 0.05).abs() < 1e-5);
         assert!((f.covariance()[(ix::POS, ix::POS)] - 0.00125).abs() < 1e-6);
+    }
+
+    #[test]
+    fn update_equals_the_joseph_form_for_a_consider_gain() {
+        let mut f = Ekf::new(EkfConfig::default());
+        // A full, symmetric covariance so every entry of the product matters.
+        for i in 0..N {
+            for j in 0..N {
+                let v = 0.002 * (i + 2 * j) as f32 / N as f32;
+                f.p[(i, j)] = if i == j { 0.05 } else { v };
+            }
+        }
+        f.p = (f.p + f.p.transpose()) * 0.5;
+        let mut h = SMatrix::<f32, 2, N>::zeros();
+        h[(0, ix::POS)] = 1.0;
+        h[(0, ix::VEL)] = -0.1;
+        h[(1, ix::YAW)] = 0.8;
+        h[(1, ix::ACCEL_BIAS + 1)] = 1.0;
+        let r = SMatrix::<f32, 2, 2>::new(0.01, 0.002, 0.002, 0.02);
+        let consider = [ix::POS, ix::POS + 1];
+        let before = f.p;
+        let s = h * before * h.transpose() + r;
+        let mut k = before * h.transpose() * s.try_inverse().unwrap();
+        for &i in &consider {
+            k.row_mut(i).fill(0.0);
+        }
+        let a = Covariance::identity() - k * h;
+        let joseph = a * before * a.transpose() + k * r * k.transpose();
+        let residual = SVector::<f32, 2>::new(0.01, -0.02);
+        let out = f.update_considering(residual, h, r, &consider, 100.0);
+        assert_eq!(out, Outcome::Accepted);
+        assert!((f.p - joseph).abs().max() < 1e-6);
+        assert_eq!(f.p, f.p.transpose());
     }
 
     #[test]
