@@ -70,7 +70,7 @@ impl<const N: usize> Leveller<N> {
                 // mid-revolution; range and bearing once, from the final point.
                 let hit = (b.range_m * (ca * cp + sa * sr * sp), b.range_m * (sa * cr));
                 let (x, y) = match &sweep {
-                    Some(sweep) => sweep.to_mid(hit, b.time_offset_s),
+                    Some(sweep) => sweep.seen_from_mid(hit, b.time_offset_s),
                     None => hit,
                 };
                 b.range_m = libm::sqrtf(x * x + y * y);

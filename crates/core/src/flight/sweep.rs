@@ -45,7 +45,7 @@ impl Sweep {
     /// beam, seen from mid-revolution: turned by the yaw since then and moved by the
     /// displacement. Inlined: it runs on every beam.
     #[inline]
-    pub(crate) fn to_mid(&self, (x, y): (f32, f32), time_offset_s: f32) -> (f32, f32) {
+    pub(crate) fn seen_from_mid(&self, (x, y): (f32, f32), time_offset_s: f32) -> (f32, f32) {
         let dt = time_offset_s - self.mid_s;
         let turn = self.motion.yaw_rate_rad_s * dt;
         // Within a revolution a hovering vehicle turns by milliradians: short series there
