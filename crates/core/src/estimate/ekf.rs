@@ -208,16 +208,16 @@ impl Ekf {
     pub fn is_valid(&self) -> bool {
         // The diagonal suffices: a non-finite covariance entry reaches the diagonal at the next
         // propagation, and checking every entry each step cost more than the prediction. This
-        // runs every step, so without a branch per entry: v * 0 is 0 for finite v and NaN
-        // otherwise.
-        let p = self.p.as_slice();
-        let (mut probe, mut lowest) = (0.0f32, 0.0f32);
-        for (i, x) in self.x.as_slice().iter().enumerate() {
-            let v = p[i * (N + 1)];
-            probe += x * 0.0 + v * 0.0;
+        // runs every step, so two instructions a value and no branch: a NaN or an infinity
+        // anywhere makes the sum NaN or infinite (so would a sum past f32's range, 1e38, which
+        // no flyable filter holds).
+        let diagonal = self.p.as_slice().iter().step_by(N + 1);
+        let (mut sum, mut lowest) = (0.0f32, 0.0f32);
+        for (x, &v) in self.x.as_slice().iter().zip(diagonal) {
+            sum += x + v;
             lowest = if v < lowest { v } else { lowest };
         }
-        let finite = probe == 0.0 && lowest >= 0.0;
+        let finite = sum * 0.0 == 0.0 && lowest >= 0.0;
         let var_xy = self.p[(ix::POS, ix::POS)].max(self.p[(ix::POS + 1, ix::POS + 1)]);
         let max = self.config.max_position_std_m;
         finite && var_xy >= 0.0 && var_xy <= max * max
@@ -371,8 +371,9 @@ fn subtract_symmetric_product<const M: usize>(
     }
 }
 
-/// True when no value is NaN or infinite (v * 0 is 0 for finite v and NaN otherwise).
-fn all_finite(values: &[f32]) -> bool {
+/// True when no value is NaN or infinite (v * 0 is 0 for finite v and NaN otherwise): cheaper
+/// than `is_finite` per value, which is several integer operations.
+pub(crate) fn all_finite(values: &[f32]) -> bool {
     values.iter().fold(0.0f32, |sum, v| sum + v * 0.0) == 0.0
 }
 
