@@ -392,7 +392,8 @@ impl Cascade {
             let alpha =
                 self.rate[axis].update(rate_sp[axis], gyro_rad_s[axis], 0.0, dt, integrate)?;
             let effectiveness = self.config.effectiveness_rad_s2[axis];
-            if !(effectiveness.is_finite() && effectiveness > 0.0) {
+            // Plain comparisons: `is_finite` is several integer operations, three times a step.
+            if !(effectiveness > 0.0 && effectiveness < f32::INFINITY) {
                 return Err(PidError::NonFinite);
             }
             *out = alpha / effectiveness;

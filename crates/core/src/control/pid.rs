@@ -82,7 +82,7 @@ impl Pid {
     /// One step. `feedforward` is added before limiting; `integrate` false freezes the integral
     /// (the caller knows of saturation downstream, e.g. a mixer at its limits). Inlined: a
     /// dozen run each step, most with constant arguments the caller's copy can fold away.
-    #[inline]
+    #[inline(always)]
     pub fn update(
         &mut self,
         setpoint: f32,
