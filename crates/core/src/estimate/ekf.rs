@@ -56,7 +56,10 @@ pub struct EkfConfig {
     pub accel_bias_walk: f32,
     pub gyro_bias_walk: f32,
     /// The covariance is propagated at most this often (s); the state every step. Keeps the
-    /// N x N products off the per-IMU-sample path.
+    /// N x N products off the per-IMU-sample path. 20 ms: at 10 ms it was a sixth of the
+    /// onboard stack's cost, and the simulated holds are unchanged (xv11 60 s seeds 1-80, RMS
+    /// 1.63 against 1.62 cm, no estimate slip; BENCHMARKS.md, issue 4). Session 3 dropped
+    /// 20 ms for two slips in 60 seeds, which were the unskewed revolutions fixed since.
     pub covariance_period_s: f32,
     /// Normalised innovation squared above which a measurement is rejected, for 1, 2 and 3
     /// dimensions (chi-square 99.7 %).
@@ -87,7 +90,7 @@ impl Default for EkfConfig {
             gyro_noise_density: 0.005,
             accel_bias_walk: 0.01,
             gyro_bias_walk: 0.0005,
-            covariance_period_s: 0.01,
+            covariance_period_s: 0.02,
             // Three times the chi-square 99.7 % points (8.81, 11.62, 14.16): during an
             // aggressive recovery (a push, 15 degrees of tilt) the prediction is more wrong than
             // its covariance says, and the 99.7 % gate threw away the scan matches needed to
