@@ -285,6 +285,14 @@ impl Ekf {
             let (_, col) = combine(&self.x, &self.p, k, false);
             self.p.set_column(ix::CLONE + k, &col);
         }
+        // The clones' own block came out of the column passes, each entry and its mirror by
+        // different roundings: one triangle is copied onto the other, so P stays exactly
+        // symmetric (the updates keep it so and no longer symmetrise).
+        for a in 1..3 {
+            for b in 0..a {
+                self.p[(ix::CLONE + b, ix::CLONE + a)] = self.p[(ix::CLONE + a, ix::CLONE + b)];
+            }
+        }
         self.has_reference = true;
     }
 
@@ -348,28 +356,25 @@ impl Ekf {
     }
 }
 
-/// `p -= k w^T + w k^T`, computed on the lower triangle (down contiguous columns) and mirrored,
-/// so the result is exactly symmetric.
+/// `p -= k w^T + w k^T` over whole columns: contiguous and of fixed length, so the loop
+/// vectorises (a triangle and its mirror, strided, cost twice as much). Entries (i, j) and
+/// (j, i) take the same two products in the same order, so a symmetric P stays exactly
+/// symmetric (the propagation keeps it so too).
 fn subtract_symmetric_product<const M: usize>(
     p: &mut Covariance,
     k: &SMatrix<f32, N, M>,
     w: &SMatrix<f32, N, M>,
 ) {
-    let p = p.as_mut_slice();
-    for j in 0..N {
-        let column = &mut p[j * N + j..(j + 1) * N];
-        for m in 0..M {
-            let (kc, wc) = (
-                &k.as_slice()[m * N + j..(m + 1) * N],
-                &w.as_slice()[m * N + j..(m + 1) * N],
-            );
-            let (kj, wj) = (kc[0], wc[0]);
+    for (j, column) in p.as_mut_slice().chunks_exact_mut(N).enumerate() {
+        for (kc, wc) in k
+            .as_slice()
+            .chunks_exact(N)
+            .zip(w.as_slice().chunks_exact(N))
+        {
+            let (kj, wj) = (kc[j], wc[j]);
             for ((out, &ki), &wi) in column.iter_mut().zip(kc).zip(wc) {
                 *out -= ki * wj + wi * kj;
             }
-        }
-        for i in j + 1..N {
-            p[i * N + j] = p[j * N + i];
         }
     }
 }
@@ -577,6 +582,20 @@ mod tests {
         assert_eq!(f.p[(ix::CLONE, ix::VEL)], 1e-3);
         assert_eq!(f.p[(ix::CLONE, ix::CLONE)], f.p[(ix::POS, ix::POS)]);
         assert_eq!(f.p[(ix::CLONE, ix::POS)], f.p[(ix::POS, ix::POS)]);
+        assert_eq!(f.p, f.p.transpose());
+        // Taken back along the velocity from a full covariance, it stays exactly symmetric.
+        for i in 0..N {
+            for j in 0..=i {
+                let v = if i == j {
+                    0.04
+                } else {
+                    1e-3 / (1 + i + j) as f32
+                };
+                f.p[(i, j)] = v;
+                f.p[(j, i)] = v;
+            }
+        }
+        f.clone_reference(0.1);
         assert_eq!(f.p, f.p.transpose());
     }
 }

@@ -128,9 +128,12 @@ impl Ekf {
                 p[row * N + k] = x;
             }
         }
-        for (row, &i) in block.iter().zip(&MOVED) {
-            for (&x, &k) in row.iter().zip(&MOVED) {
+        // One triangle of the block, mirrored: P stays exactly symmetric, which the updates
+        // rely on (they keep it so without a symmetrising pass).
+        for (m, (row, &i)) in block.iter().zip(&MOVED).enumerate() {
+            for (&x, &k) in row[..=m].iter().zip(&MOVED) {
                 p[k * N + i] = x;
+                p[i * N + k] = x;
             }
         }
 
