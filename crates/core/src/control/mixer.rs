@@ -75,7 +75,8 @@ impl Mixer {
     /// Allocates a demand to the four motors (seed 002 eq. 20) with attitude-first saturation.
     /// Non-finite parts of the demand are treated as zero, so the commands are always finite.
     pub fn mix(&self, demand: Demand) -> Mixed {
-        let clean = |v: f32| if v.is_finite() { v } else { 0.0 };
+        // v * 0 is 0 for finite v and NaN otherwise: cheaper than `is_finite`, every step.
+        let clean = |v: f32| if v * 0.0 == 0.0 { v } else { 0.0 };
         let (mut roll, mut pitch) = (clean(demand.roll), clean(demand.pitch));
         let yaw_request = clean(demand.yaw);
         let collective_request = clean(demand.collective);
