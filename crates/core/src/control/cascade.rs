@@ -13,7 +13,7 @@ use super::mixer::Demand;
 use super::pid::{Pid, PidConfig, PidError};
 use crate::geom::normalize_angle;
 use crate::msgs::{EstimatedState, GRAVITY_M_S2};
-use libm::{atanf, cosf, sinf, sqrtf};
+use libm::{atanf, cosf, sqrtf};
 
 /// Gains and limits of the whole cascade. Defaults suit the simulator's "pelican" vehicle (1 kg,
 /// 0.21 m arms, 7 N rotors); for another vehicle set `effectiveness_rad_s2` and
@@ -330,7 +330,7 @@ impl Cascade {
         // Vertical: never ask for less than 30 % of gravity, so the vehicle stays upright.
         let lift = (GRAVITY_M_S2 + accel[2]).max(0.3 * GRAVITY_M_S2);
         // Horizontal demand rotated into the heading frame, bounded by the tilt limit.
-        let (s, co) = (sinf(state.yaw_rad), cosf(state.yaw_rad));
+        let (s, co) = libm::sincosf(state.yaw_rad);
         let mut ax = co * accel[0] + s * accel[1];
         let mut ay = -s * accel[0] + co * accel[1];
         let max_h = lift * libm::tanf(c.max_tilt_rad);
@@ -340,8 +340,9 @@ impl Cascade {
             ay *= max_h / h;
         }
         // ZYX Euler, FLU: thrust along body z tilts to (cos(phi) sin(theta), -sin(phi)).
+        // cos(pitch) = lift / sqrt(lift^2 + ax^2), so roll needs no cosine of its own.
         let pitch = atanf(ax / lift);
-        let roll = atanf(-ay * cosf(pitch) / lift);
+        let roll = atanf(-ay / sqrtf(lift * lift + ax * ax));
         Ok(AttitudeTarget {
             roll_rad: roll,
             pitch_rad: pitch,
@@ -392,7 +393,8 @@ impl Cascade {
             let alpha =
                 self.rate[axis].update(rate_sp[axis], gyro_rad_s[axis], 0.0, dt, integrate)?;
             let effectiveness = self.config.effectiveness_rad_s2[axis];
-            if !(effectiveness.is_finite() && effectiveness > 0.0) {
+            // Plain comparisons: `is_finite` is several integer operations, three times a step.
+            if !(effectiveness > 0.0 && effectiveness < f32::INFINITY) {
                 return Err(PidError::NonFinite);
             }
             *out = alpha / effectiveness;
@@ -409,6 +411,7 @@ impl Cascade {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use libm::sinf;
 
     fn level_at(position_m: [f32; 3]) -> EstimatedState {
         EstimatedState {

@@ -82,7 +82,7 @@ impl Pid {
     /// One step. `feedforward` is added before limiting; `integrate` false freezes the integral
     /// (the caller knows of saturation downstream, e.g. a mixer at its limits). Inlined: a
     /// dozen run each step, most with constant arguments the caller's copy can fold away.
-    #[inline]
+    #[inline(always)]
     pub fn update(
         &mut self,
         setpoint: f32,
@@ -92,15 +92,17 @@ impl Pid {
         integrate: bool,
     ) -> Result<f32, PidError> {
         // Plain comparisons and x * 0 (0 when finite, NaN when not): this runs a dozen times a
-        // step, and `is_finite` costs several integer operations per value.
-        if !(dt > 0.0 && dt < f32::INFINITY) {
+        // step, and `is_finite` costs several integer operations per value (the compiler turns
+        // `dt < INFINITY` into those too). The error is NaN or infinite when either of its
+        // operands is (or when their difference overflows f32, which is refused as well).
+        if !(dt > 0.0 && dt * 0.0 == 0.0) {
             return Err(PidError::BadDt);
         }
-        if setpoint * 0.0 + measurement * 0.0 + feedforward * 0.0 != 0.0 {
+        let error = setpoint - measurement;
+        if error * 0.0 + feedforward * 0.0 != 0.0 {
             return Err(PidError::NonFinite);
         }
         let c = &self.config;
-        let error = setpoint - measurement;
         // Most loops of the cascade have no derivative or no integral; they skip that arithmetic
         // (with kd zero the measurement rate starts from rest if kd is set later).
         if c.kd != 0.0 {

@@ -56,7 +56,10 @@ pub struct EkfConfig {
     pub accel_bias_walk: f32,
     pub gyro_bias_walk: f32,
     /// The covariance is propagated at most this often (s); the state every step. Keeps the
-    /// N x N products off the per-IMU-sample path.
+    /// N x N products off the per-IMU-sample path. 20 ms: at 10 ms it was a sixth of the
+    /// onboard stack's cost, and the simulated holds are unchanged (xv11 60 s seeds 1-80, RMS
+    /// 1.63 against 1.62 cm, no estimate slip; BENCHMARKS.md, issue 4). Session 3 dropped
+    /// 20 ms for two slips in 60 seeds, which were the unskewed revolutions fixed since.
     pub covariance_period_s: f32,
     /// Normalised innovation squared above which a measurement is rejected, for 1, 2 and 3
     /// dimensions (chi-square 99.7 %).
@@ -87,7 +90,7 @@ impl Default for EkfConfig {
             gyro_noise_density: 0.005,
             accel_bias_walk: 0.01,
             gyro_bias_walk: 0.0005,
-            covariance_period_s: 0.01,
+            covariance_period_s: 0.02,
             // Three times the chi-square 99.7 % points (8.81, 11.62, 14.16): during an
             // aggressive recovery (a push, 15 degrees of tilt) the prediction is more wrong than
             // its covariance says, and the 99.7 % gate threw away the scan matches needed to
@@ -208,16 +211,16 @@ impl Ekf {
     pub fn is_valid(&self) -> bool {
         // The diagonal suffices: a non-finite covariance entry reaches the diagonal at the next
         // propagation, and checking every entry each step cost more than the prediction. This
-        // runs every step, so without a branch per entry: v * 0 is 0 for finite v and NaN
-        // otherwise.
-        let p = self.p.as_slice();
-        let (mut probe, mut lowest) = (0.0f32, 0.0f32);
-        for (i, x) in self.x.as_slice().iter().enumerate() {
-            let v = p[i * (N + 1)];
-            probe += x * 0.0 + v * 0.0;
+        // runs every step, so two instructions a value and no branch: a NaN or an infinity
+        // anywhere makes the sum NaN or infinite (so would a sum past f32's range, 1e38, which
+        // no flyable filter holds).
+        let diagonal = self.p.as_slice().iter().step_by(N + 1);
+        let (mut sum, mut lowest) = (0.0f32, 0.0f32);
+        for (x, &v) in self.x.as_slice().iter().zip(diagonal) {
+            sum += x + v;
             lowest = if v < lowest { v } else { lowest };
         }
-        let finite = probe == 0.0 && lowest >= 0.0;
+        let finite = sum * 0.0 == 0.0 && lowest >= 0.0;
         let var_xy = self.p[(ix::POS, ix::POS)].max(self.p[(ix::POS + 1, ix::POS + 1)]);
         let max = self.config.max_position_std_m;
         finite && var_xy >= 0.0 && var_xy <= max * max
@@ -282,6 +285,14 @@ impl Ekf {
             let (_, col) = combine(&self.x, &self.p, k, false);
             self.p.set_column(ix::CLONE + k, &col);
         }
+        // The clones' own block came out of the column passes, each entry and its mirror by
+        // different roundings: one triangle is copied onto the other, so P stays exactly
+        // symmetric (the updates keep it so and no longer symmetrise).
+        for a in 1..3 {
+            for b in 0..a {
+                self.p[(ix::CLONE + b, ix::CLONE + a)] = self.p[(ix::CLONE + a, ix::CLONE + b)];
+            }
+        }
         self.has_reference = true;
     }
 
@@ -333,18 +344,44 @@ impl Ekf {
             k.row_mut(i).fill(0.0);
         }
         self.x += k * residual;
-        // Joseph form (I - KH) P (I - KH)^T + K R K^T, multiplied out through the N x M factors
-        // (B = P - K (H P), then B - (B H^T) K^T): the same products without the N x N ones.
-        let b = self.p - k * pht.transpose();
-        self.p = b - times_ht(&b, &h) * k.transpose() + k * r * k.transpose();
-        self.p = (self.p + self.p.transpose()) * 0.5;
+        // Joseph form (I - KH) P (I - KH)^T + K R K^T multiplied out: with U = P H^T and
+        // S = H U + R it is P - K U^T - U K^T + K S K^T for any gain (zeroed consider rows
+        // included), which is P - (K W^T + W K^T) with W = U - K S / 2. One symmetric correction
+        // of rank 2M on one triangle, mirrored: the N x N temporaries and the symmetrising pass
+        // were most of an update's cost.
+        let w = pht - k * s * 0.5;
+        subtract_symmetric_product(&mut self.p, &k, &w);
         self.x[ix::YAW] = crate::geom::normalize_angle(self.x[ix::YAW]);
         Outcome::Accepted
     }
 }
 
-/// True when no value is NaN or infinite (v * 0 is 0 for finite v and NaN otherwise).
-fn all_finite(values: &[f32]) -> bool {
+/// `p -= k w^T + w k^T` over whole columns: contiguous and of fixed length, so the loop
+/// vectorises (a triangle and its mirror, strided, cost twice as much). Entries (i, j) and
+/// (j, i) take the same two products in the same order, so a symmetric P stays exactly
+/// symmetric (the propagation keeps it so too).
+fn subtract_symmetric_product<const M: usize>(
+    p: &mut Covariance,
+    k: &SMatrix<f32, N, M>,
+    w: &SMatrix<f32, N, M>,
+) {
+    for (j, column) in p.as_mut_slice().chunks_exact_mut(N).enumerate() {
+        for (kc, wc) in k
+            .as_slice()
+            .chunks_exact(N)
+            .zip(w.as_slice().chunks_exact(N))
+        {
+            let (kj, wj) = (kc[j], wc[j]);
+            for ((out, &ki), &wi) in column.iter_mut().zip(kc).zip(wc) {
+                *out -= ki * wj + wi * kj;
+            }
+        }
+    }
+}
+
+/// True when no value is NaN or infinite (v * 0 is 0 for finite v and NaN otherwise): cheaper
+/// than `is_finite` per value, which is several integer operations.
+pub(crate) fn all_finite(values: &[f32]) -> bool {
     values.iter().fold(0.0f32, |sum, v| sum + v * 0.0) == 0.0
 }
 
@@ -378,6 +415,39 @@ mod tests {
         assert_eq!(out, Outcome::Accepted);
         assert!((f.state()[ix::POS] - 0.05).abs() < 1e-5);
         assert!((f.covariance()[(ix::POS, ix::POS)] - 0.00125).abs() < 1e-6);
+    }
+
+    #[test]
+    fn update_equals_the_joseph_form_for_a_consider_gain() {
+        let mut f = Ekf::new(EkfConfig::default());
+        // A full, symmetric covariance so every entry of the product matters.
+        for i in 0..N {
+            for j in 0..N {
+                let v = 0.002 * (i + 2 * j) as f32 / N as f32;
+                f.p[(i, j)] = if i == j { 0.05 } else { v };
+            }
+        }
+        f.p = (f.p + f.p.transpose()) * 0.5;
+        let mut h = SMatrix::<f32, 2, N>::zeros();
+        h[(0, ix::POS)] = 1.0;
+        h[(0, ix::VEL)] = -0.1;
+        h[(1, ix::YAW)] = 0.8;
+        h[(1, ix::ACCEL_BIAS + 1)] = 1.0;
+        let r = SMatrix::<f32, 2, 2>::new(0.01, 0.002, 0.002, 0.02);
+        let consider = [ix::POS, ix::POS + 1];
+        let before = f.p;
+        let s = h * before * h.transpose() + r;
+        let mut k = before * h.transpose() * s.try_inverse().unwrap();
+        for &i in &consider {
+            k.row_mut(i).fill(0.0);
+        }
+        let a = Covariance::identity() - k * h;
+        let joseph = a * before * a.transpose() + k * r * k.transpose();
+        let residual = SVector::<f32, 2>::new(0.01, -0.02);
+        let out = f.update_considering(residual, h, r, &consider, 100.0);
+        assert_eq!(out, Outcome::Accepted);
+        assert!((f.p - joseph).abs().max() < 1e-6);
+        assert_eq!(f.p, f.p.transpose());
     }
 
     #[test]
@@ -512,6 +582,20 @@ mod tests {
         assert_eq!(f.p[(ix::CLONE, ix::VEL)], 1e-3);
         assert_eq!(f.p[(ix::CLONE, ix::CLONE)], f.p[(ix::POS, ix::POS)]);
         assert_eq!(f.p[(ix::CLONE, ix::POS)], f.p[(ix::POS, ix::POS)]);
+        assert_eq!(f.p, f.p.transpose());
+        // Taken back along the velocity from a full covariance, it stays exactly symmetric.
+        for i in 0..N {
+            for j in 0..=i {
+                let v = if i == j {
+                    0.04
+                } else {
+                    1e-3 / (1 + i + j) as f32
+                };
+                f.p[(i, j)] = v;
+                f.p[(j, i)] = v;
+            }
+        }
+        f.clone_reference(0.1);
         assert_eq!(f.p, f.p.transpose());
     }
 }

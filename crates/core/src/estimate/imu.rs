@@ -5,7 +5,7 @@
 //! the body rates. Process noise is white accelerometer and gyro noise plus bias random walks.
 
 use super::attitude::Tilt;
-use super::ekf::{ix, Ekf, N};
+use super::ekf::{all_finite, ix, Ekf, N};
 use crate::geom::normalize_angle;
 use crate::msgs::GRAVITY_M_S2;
 use nalgebra::{Matrix3, Vector3};
@@ -48,18 +48,14 @@ impl Ekf {
     /// Advances the state by `dt` with one IMU sample; the covariance catches up every
     /// `covariance_period_s` using the Jacobian at the current state.
     pub fn predict(&mut self, imu: &ImuStep, dt: f32) -> Result<(), PredictError> {
-        if !(dt.is_finite() && dt > 0.0 && dt < 1.0) {
+        // A NaN fails both comparisons.
+        if !(dt > 0.0 && dt < 1.0) {
             return Err(PredictError::BadDt);
         }
-        let finite = imu
-            .accel_m_s2
-            .iter()
-            .chain(imu.gyro_rad_s.iter())
-            .all(|v| v.is_finite())
-            && imu.tilt.sin_roll.is_finite()
-            && imu.tilt.cos_roll.is_finite()
-            && imu.tilt.sin_pitch.is_finite()
-            && imu.tilt.cos_pitch.is_finite();
+        let t = &imu.tilt;
+        let finite = all_finite(&imu.accel_m_s2)
+            && all_finite(&imu.gyro_rad_s)
+            && all_finite(&[t.sin_roll, t.cos_roll, t.sin_pitch, t.cos_pitch]);
         if !finite {
             return Err(PredictError::NonFinite);
         }
@@ -132,9 +128,12 @@ impl Ekf {
                 p[row * N + k] = x;
             }
         }
-        for (row, &i) in block.iter().zip(&MOVED) {
-            for (&x, &k) in row.iter().zip(&MOVED) {
+        // One triangle of the block, mirrored: P stays exactly symmetric, which the updates
+        // rely on (they keep it so without a symmetrising pass).
+        for (m, (row, &i)) in block.iter().zip(&MOVED).enumerate() {
+            for (&x, &k) in row[..=m].iter().zip(&MOVED) {
                 p[k * N + i] = x;
+                p[i * N + k] = x;
             }
         }
 

@@ -147,7 +147,8 @@ impl Autopilot {
         // ---- sense: sanitise what the vehicle handed us ----
         let pilot = self.sanitise_pilot(inputs.pilot);
         // SAFETY-CRITICAL: the kill switch stops the motors even when nothing else can run.
-        if !(dt.is_finite() && dt > 0.0 && dt <= self.config.landing.max_dt_s) {
+        // Plain comparisons (a NaN fails them): `is_finite` is several integer operations.
+        if !(dt > 0.0 && dt <= self.config.landing.max_dt_s && dt < f32::INFINITY) {
             self.faults.bad_dt = self.faults.bad_dt.saturating_add(1);
             if pilot.kill {
                 self.last.motors = MotorCommands::STOPPED;

@@ -66,15 +66,15 @@ impl<const N: usize> Leveller<N> {
                     self.sin_cos[k] = libm::sincosf(b.angle_rad);
                 }
                 let (sa, ca) = self.sin_cos[k];
-                // The beam's unit direction rotated into the world, horizontal part.
-                let x = ca * cp + sa * sr * sp;
-                let y = sa * cr;
-                b.range_m *= libm::sqrtf(x * x + y * y);
+                // The hit rotated into the world, horizontal part, then taken to
+                // mid-revolution; range and bearing once, from the final point.
+                let hit = (b.range_m * (ca * cp + sa * sr * sp), b.range_m * (sa * cr));
+                let (x, y) = match &sweep {
+                    Some(sweep) => sweep.seen_from_mid(hit, b.time_offset_s),
+                    None => hit,
+                };
+                b.range_m = libm::sqrtf(x * x + y * y);
                 b.angle_rad += turn_between(ca * x + sa * y, ca * y - sa * x);
-                if let Some(sweep) = &sweep {
-                    (b.range_m, b.angle_rad) =
-                        sweep.unskew(b.range_m, b.angle_rad, (sa, ca), b.time_offset_s);
-                }
             }
             // `level` has the input's capacity, so this cannot fail.
             let _ = self.level.push(b);
@@ -85,6 +85,8 @@ impl<const N: usize> Leveller<N> {
 
 /// The angle from a direction to another, given their dot and cross products (any common
 /// scale): a series where the angle is small, as levelling's always is below steep tilts.
+/// Inlined: it runs on every beam.
+#[inline]
 pub(crate) fn turn_between(dot: f32, cross: f32) -> f32 {
     // Below 1/8 the series' first omitted term, q^9 / 9, is under 2e-9 rad.
     if dot > 0.0 && libm::fabsf(cross) <= 0.125 * dot {

@@ -51,22 +51,35 @@ impl<const N: usize> Onboard<N> {
     /// One step: match the scan if one completed, then run the autopilot. A scan-match result
     /// already in `inputs` is replaced when a scan is given.
     pub fn step(&mut self, inputs: &Inputs, scan: Option<&Scan<N>>, dt: f32) -> Outputs {
-        let mut inputs = *inputs;
-        if let Some(scan) = scan {
-            let e = self.autopilot.last_outputs().estimate;
-            let pose = Pose2::new(e.position_m[0], e.position_m[1], e.yaw_rad);
-            let prior = self.pose_at_last_scan.map(|before| before.between(pose));
-            self.pose_at_last_scan = Some(pose);
-            let level =
-                self.leveller
-                    .level(scan, e.roll_rad, e.pitch_rad, sweep_motion(&e, &inputs));
-            let step = self.odometry.update(level, prior);
-            if let OdometryStep::Matched { result, .. } = &step {
-                self.rejected_points += u64::from(result.quality.rejected_dynamic);
+        // The inputs are copied (a library call each step) only when a scan's match goes in.
+        let matched;
+        let inputs = match scan {
+            Some(scan) => {
+                matched = Inputs {
+                    scan_match: Some(self.match_scan(inputs, scan)),
+                    ..*inputs
+                };
+                &matched
             }
-            inputs.scan_match = Some(scan_match_delta(&step, scan.stamp_s));
+            None => inputs,
+        };
+        self.autopilot.step(inputs, dt)
+    }
+
+    /// Levels the scan, matches it and returns the estimator's view of the odometry step.
+    fn match_scan(&mut self, inputs: &Inputs, scan: &Scan<N>) -> ScanMatchDelta {
+        let e = self.autopilot.last_outputs().estimate;
+        let pose = Pose2::new(e.position_m[0], e.position_m[1], e.yaw_rad);
+        let prior = self.pose_at_last_scan.map(|before| before.between(pose));
+        self.pose_at_last_scan = Some(pose);
+        let level = self
+            .leveller
+            .level(scan, e.roll_rad, e.pitch_rad, sweep_motion(&e, inputs));
+        let step = self.odometry.update(level, prior);
+        if let OdometryStep::Matched { result, .. } = &step {
+            self.rejected_points += u64::from(result.quality.rejected_dynamic);
         }
-        self.autopilot.step(&inputs, dt)
+        scan_match_delta(&step, scan.stamp_s)
     }
 }
 
