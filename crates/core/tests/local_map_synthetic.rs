@@ -234,6 +234,36 @@ fn relocalization_declines_young_maps_and_keeps_a_corridor_s_axis() {
     assert!((found.x - drifted.x).abs() < 0.15, "{found:?}");
 }
 
+/// Driving down a corridor whose walls behind were mapped long ago and whose walls ahead only
+/// now: every pose further back puts more of the scan on old walls, so the score rises off the
+/// window's edge. The search must not take that slope for a peak and jump back along the
+/// corridor (it did, 1 m at a time, in the simulator's office).
+#[test]
+fn relocalization_does_not_slide_back_onto_old_walls_along_a_corridor() {
+    let world = corridor();
+    let mut cells = vec![MapCell::default(); 256 * 256];
+    let mut map = LineMap::new(&mut cells, LineMapConfig::default()).unwrap();
+    let config = RelocalizeConfig {
+        // Only the slope test stands between the search and the jump.
+        min_gain: 1.2,
+        ..RelocalizeConfig::default()
+    };
+    let now = config.min_age + 10;
+    for (k, x) in (-12..=12).map(|k| (k, k as f32)) {
+        let pose = Pose2::new(x, 0.0, 0.0);
+        for p in points(&world, pose, 300 + k as u64) {
+            let w = pose.transform(p);
+            map.insert(w, if w.x < -1.0 { 0 } else { now });
+        }
+    }
+    let truth = Pose2::IDENTITY;
+    let pts = points(&world, truth, 7);
+    let found = relocalize(&map, &pts, truth, now, &config);
+    if let Ok(pose) = found {
+        assert!(truth.distance_to(pose).0 < 0.15, "{pose:?}");
+    }
+}
+
 /// What the map costs an embedded user: one `MapCell` per cell of the caller's buffer.
 #[test]
 fn a_map_cell_stays_small() {
