@@ -64,6 +64,11 @@ pub struct MatchConfig {
     /// A translation direction is degenerate (a featureless corridor) when its information is
     /// below this fraction of the best-constrained direction's.
     pub degenerate_ratio: f32,
+    /// `icl` only: when a translation direction is degenerate, at most this many point-to-point
+    /// (`icp`) passes, started from the answer, estimate the motion along it instead of leaving
+    /// the guess there; 0 leaves the guess. The direction is still reported degenerate with its
+    /// variance unobserved, so an estimator fusing the match keeps ignoring it.
+    pub degenerate_point_passes: u16,
     /// Seed 000 sec. 4.2: a point is dynamic or an outlier when its cost J at the initial guess
     /// exceeds `gain * (dx_prev^2 + dy_prev^2) + floor^2`.
     pub dynamic_rejection: bool,
@@ -104,6 +109,7 @@ impl Default for MatchConfig {
             convergence_m: 1e-3,
             convergence_rad: 5e-4,
             degenerate_ratio: 0.02,
+            degenerate_point_passes: 5,
             dynamic_rejection: true,
             dynamic_gain: 4.0,
             dynamic_floor_m: 0.2,
