@@ -59,7 +59,7 @@ impl Default for RefineConfig {
             max_shift_m: 0.3,
             max_turn_rad: 0.1,
             min_conditioning: 0.02,
-            matcher_weight: 0.01,
+            matcher_weight: 0.02,
             max_correction_d2: 300.0,
         }
     }
