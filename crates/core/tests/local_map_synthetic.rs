@@ -249,9 +249,9 @@ fn relocalization_does_not_slide_back_onto_old_walls_along_a_corridor() {
         ..RelocalizeConfig::default()
     };
     let now = config.min_age + 10;
-    for (k, x) in (-12..=12).map(|k| (k, k as f32)) {
-        let pose = Pose2::new(x, 0.0, 0.0);
-        for p in points(&world, pose, 300 + k as u64) {
+    for k in 0..=24u64 {
+        let pose = Pose2::new(k as f32 - 12.0, 0.0, 0.0);
+        for p in points(&world, pose, 300 + k) {
             let w = pose.transform(p);
             map.insert(w, if w.x < -1.0 { 0 } else { now });
         }
