@@ -18,13 +18,12 @@ fn plumbline(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
-fn json_number(json: &str, key: &str) -> f64 {
-    let at = json
-        .find(&format!("\"{key}\":"))
-        .unwrap_or_else(|| panic!("{key} in {json}"));
-    let rest = &json[at + key.len() + 3..];
-    let end = rest.find([',', '}']).unwrap();
-    rest[..end].trim().parse().unwrap()
+/// A number from the JSON summary a command printed last.
+fn json_number(stdout: &str, key: &str) -> f64 {
+    let summary: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    summary[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} in {stdout}"))
 }
 
 #[test]

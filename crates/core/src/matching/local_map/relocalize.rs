@@ -123,10 +123,8 @@ pub fn relocalize(
     let at_guess = search.score(guess);
     let mut peak = search.best_in_window(guess);
     if peak.on_edge {
-        let again = search.best_in_window(peak.pose);
-        if again.score >= peak.score {
-            peak = again;
-        }
+        // The new window holds the old peak, so its best scores at least as well.
+        peak = search.best_in_window(peak.pose);
     }
     let mut scores = SearchScores {
         best: peak.score,
