@@ -100,32 +100,28 @@ impl<const N: usize> PreparedScan<N> {
     /// Fills from a scan: valid beams only, bearings unwrapped. Lines are fitted separately by
     /// [`Self::fit_lines`] because only a reference needs them.
     pub fn load(&mut self, scan: &Scan<N>) -> Result<(), PrepareError> {
-        self.len = 0;
         self.has_lines = false;
-        let mut first = None;
-        let mut prev = f32::NEG_INFINITY;
-        for (i, beam) in scan.beams().iter().enumerate() {
-            if !(beam.valid && beam.range_m.is_finite() && beam.angle_rad.is_finite()) {
-                continue;
-            }
-            let a0 = *first.get_or_insert(beam.angle_rad);
-            let bearing = beam.angle_rad - a0;
-            if bearing < prev || bearing > TAU + 1e-3 {
-                return Err(PrepareError::BeamsNotInAngularOrder { beam: i });
-            }
-            prev = bearing;
-            // The range waits in x for the loop below.
-            self.points[self.len] = Vec2::new(beam.range_m, 0.0);
-            self.bearings[self.len] = beam.angle_rad;
-            self.len += 1;
+        // Every beam is written to the next free slot and only a valid one keeps it, so the loop
+        // has no branch on validity; the order is checked afterwards in a loop of its own. (A
+        // branch per beam on both was two thirds of the load.) The range waits in x for the
+        // sine and cosine below.
+        let mut len = 0;
+        for beam in scan.beams() {
+            let ok = beam.valid & beam.range_m.is_finite() & beam.angle_rad.is_finite();
+            // `len` counts valid beams before this one, so it is below N.
+            self.points[len] = Vec2::new(beam.range_m, 0.0);
+            self.bearings[len] = beam.angle_rad;
+            len += usize::from(ok);
         }
-        // Sines and cosines in a loop of their own, without branches or early exits, so the
-        // compiler evaluates the polynomials for several beams at once.
-        let valid = self.points[..self.len].iter_mut();
-        for (p, &a) in valid.zip(&self.bearings[..self.len]) {
-            let (sin, cos) = sin_cos(a);
-            *p = Vec2::new(p.x * cos, p.x * sin);
+        self.len = len;
+        // The vectorised check says whether; the scalar one, only on a refused scan, says where.
+        if !self.in_angular_order() {
+            if let Some(beam) = first_out_of_order(scan.beams()) {
+                self.len = 0;
+                return Err(PrepareError::BeamsNotInAngularOrder { beam });
+            }
         }
+        ranges_to_points(&mut self.points[..len], &self.bearings[..len]);
         let span = if self.len > 1 {
             self.bearings[self.len - 1] - self.bearings[0]
         } else {
@@ -135,6 +131,19 @@ impl<const N: usize> PreparedScan<N> {
         self.full_circle = span + 3.0 * self.mean_step() >= TAU;
         self.margin = 2.0 * self.mean_step();
         Ok(())
+    }
+
+    /// Whether the kept bearings increase (ties allowed) through at most a turn, measured from
+    /// the first as [`first_out_of_order`] measures them. Without early exits, so it vectorises.
+    fn in_angular_order(&self) -> bool {
+        let b = &self.bearings[..self.len];
+        let Some((&a0, _)) = b.split_first() else {
+            return true;
+        };
+        let increasing = b
+            .windows(2)
+            .fold(true, |ok, w| ok & (w[1] - a0 >= w[0] - a0));
+        increasing & (b[b.len() - 1] - a0 <= TAU + 1e-3)
     }
 
     /// Fits a local line to every point from its angular neighbours on each side, walking
@@ -393,6 +402,36 @@ impl<const N: usize> PreparedScan<N> {
         }
         best
     }
+}
+
+/// Turns the ranges waiting in `points`' x into points at `bearings`: sines and cosines in a
+/// loop of their own, without branches or early exits, so the compiler evaluates the
+/// polynomials for four beams at once. Out of line: inlined into `load`, the loop stayed scalar.
+#[inline(never)]
+fn ranges_to_points(points: &mut [Vec2], bearings: &[f32]) {
+    for (p, &a) in points.iter_mut().zip(bearings) {
+        let (sin, cos) = sin_cos(a);
+        *p = Vec2::new(p.x * cos, p.x * sin);
+    }
+}
+
+/// The first valid beam whose bearing from the first valid beam is below its predecessor's or
+/// beyond a turn; the slow path of [`PreparedScan::load`], taken only for a scan it refuses.
+#[cold]
+fn first_out_of_order(beams: &[crate::scan::Beam]) -> Option<usize> {
+    let mut first = None;
+    let mut prev = f32::NEG_INFINITY;
+    for (i, beam) in beams.iter().enumerate() {
+        if !(beam.valid && beam.range_m.is_finite() && beam.angle_rad.is_finite()) {
+            continue;
+        }
+        let bearing = beam.angle_rad - *first.get_or_insert(beam.angle_rad);
+        if bearing < prev || bearing > TAU + 1e-3 {
+            return Some(i);
+        }
+        prev = bearing;
+    }
+    None
 }
 
 /// Index and value of the least of `values` (the first of equals), ignoring NaN and infinity.
@@ -699,6 +738,53 @@ mod tests {
             assert_eq!(sides, (4, 4));
         }
         p.fit_lines(1.0, 0.05, 1.0);
+    }
+
+    proptest::proptest! {
+        /// The branch-free load refuses exactly the scans the beam-by-beam rule refuses, naming
+        /// the same beam, and otherwise keeps exactly the valid beams: on scans with invalid and
+        /// non-finite beams, backward steps, ties and spans past a turn.
+        #[test]
+        fn load_keeps_valid_beams_and_refuses_as_the_scalar_rule_does(
+            beams in proptest::collection::vec(
+                (0.0f32..0.2, proptest::bool::weighted(0.8), 0u8..40), 0..64
+            ),
+            start in -4.0f32..4.0,
+        ) {
+            let mut s: Scan<64> = Scan::new(0.0);
+            let mut angle = start;
+            for &(step, valid, kind) in &beams {
+                // Mostly forward steps (often past a turn in all), now and then a tie, a step
+                // back or a non-finite value.
+                angle += match kind {
+                    0 => 0.0,
+                    1 => -step,
+                    _ => step,
+                };
+                let range = if kind == 2 { f32::NAN } else { 1.0 + step };
+                let a = if kind == 3 { f32::INFINITY } else { angle };
+                let mut b = Beam::new(a, range);
+                b.valid &= valid;
+                s.push(b).unwrap();
+            }
+            let mut p: PreparedScan<64> = PreparedScan::default();
+            match first_out_of_order(s.beams()) {
+                Some(beam) => proptest::prop_assert_eq!(
+                    p.load(&s), Err(PrepareError::BeamsNotInAngularOrder { beam })
+                ),
+                None => {
+                    proptest::prop_assert_eq!(p.load(&s), Ok(()));
+                    let kept = s.beams().iter().filter(|b| {
+                        b.valid && b.range_m.is_finite() && b.angle_rad.is_finite()
+                    });
+                    proptest::prop_assert_eq!(p.len(), kept.clone().count());
+                    for (i, b) in kept.enumerate() {
+                        let d = (p.point(i) - b.point()).norm();
+                        proptest::prop_assert!(d < 1e-5, "beam {}: {:?} vs {:?}", i, p.point(i), b.point());
+                    }
+                }
+            }
+        }
     }
 
     #[test]
