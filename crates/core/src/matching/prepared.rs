@@ -201,8 +201,7 @@ impl<const N: usize> PreparedScan<N> {
         self.fit_near_ends::<M>(inner.end..self.len, limits);
     }
 
-    /// The fits of `centres`, four at a time from a copy of their neighbours (wrapped round a
-    /// full circle; outside a scan that is not one, zeros the caps keep out of reach).
+    /// The fits of `centres`, four at a time from a copy of their neighbours.
     #[inline(never)]
     fn fit_near_ends<const M: usize>(&mut self, centres: Range<usize>, limits: &FitLimits) {
         for i in centres.clone().step_by(4) {
@@ -221,9 +220,12 @@ impl<const N: usize> PreparedScan<N> {
     fn fit_gathered<const M: usize>(&self, i: usize, limits: &FitLimits) -> Fits {
         const MOST: usize = 2 * DENSE_LINE_NEIGHBOURS + 4;
         let (mut xs, mut ys) = ([0.0f32; MOST], [0.0f32; MOST]);
-        for (j, (x, y)) in xs.iter_mut().zip(&mut ys).take(2 * M + 4).enumerate() {
-            let at = self.wrap((i + j) as isize - M as isize);
-            (*x, *y) = at.map_or((0.0, 0.0), |j| (self.points[j].x, self.points[j].y));
+        // Indices taken round the ring: outside a scan that is not a full circle, the points
+        // from its other end are never taken (the caps say so), just finite.
+        let mut k = (i as isize - M as isize).rem_euclid(self.len as isize) as usize;
+        for (x, y) in xs.iter_mut().zip(&mut ys).take(2 * M + 4) {
+            (*x, *y) = (self.points[k].x, self.points[k].y);
+            k = if k + 1 == self.len { 0 } else { k + 1 };
         }
         let cap = |side: fn(usize, usize) -> usize| {
             f32x4::from(core::array::from_fn::<f32, 4, _>(|l| {
