@@ -173,11 +173,12 @@ impl<const N: usize> PreparedScan<N> {
 
     /// [`Self::fit_lines`] with at most `M` neighbours a side: groups of four centres whose
     /// neighbours are all inside the scan, a block of [`FIT_BLOCK`] centres at a time, read
-    /// them from a copy of the block's points with x and y apart, so four consecutive ones are
-    /// a load each (`wide` has no shuffle to take them out of `Vec2` pairs; four lanes filled one
-    /// at a time cost 14 instructions a load). A block, not the scan: a copy of all `N` points
-    /// (zeroed first) cost more than the fits at 360 beams in a 1440-beam matcher. The `M` or so
-    /// centres at each end go through [`Self::fit_near_ends`].
+    /// them from a copy of the block's points with x and y apart, so the x (or y) of four
+    /// consecutive ones is one load (`wide` has no shuffle to take them out of `Vec2` pairs, and
+    /// lanes filled one at a time cost 14 instructions for four points' x and y). A block, not
+    /// the scan: a stack copy of all `N` points, zeroed first, cost 12 k instructions a match at
+    /// 360 beams in a 1440-beam matcher, and 11.5 KB of stack. The `M` or so centres at each end
+    /// go through [`Self::fit_near_ends`].
     #[inline(always)]
     fn fit_all<const M: usize>(&mut self, limits: &FitLimits) {
         const MOST: usize = FIT_BLOCK + 2 * DENSE_LINE_NEIGHBOURS;
