@@ -8,6 +8,7 @@ mod associate;
 mod config;
 mod driver;
 pub(crate) mod fast_math;
+mod fit_lanes;
 mod icl_paper;
 mod linalg;
 pub mod local_map;
