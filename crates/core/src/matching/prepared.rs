@@ -8,7 +8,7 @@
 use super::fast_math::{atan2_approx, sin_cos, sin_cos_x4};
 use super::fit_lanes::{fit4, lane, FitLimits, Fits};
 use crate::geom::Vec2;
-use crate::scan::Scan;
+use crate::scan::{Beam, Scan};
 use core::f32::consts::TAU;
 use core::ops::Range;
 use wide::{f32x4, CmpGt};
@@ -112,18 +112,7 @@ impl<const N: usize> PreparedScan<N> {
     /// [`Self::fit_lines`] because only a reference needs them.
     pub fn load(&mut self, scan: &Scan<N>) -> Result<(), PrepareError> {
         self.has_lines = false;
-        // Every beam is written to the next free slot and only a valid one keeps it, so the loop
-        // has no branch on validity; the order is checked afterwards in a loop of its own. (A
-        // branch per beam on both was two thirds of the load.) The range waits in x for the
-        // sine and cosine below.
-        let mut len = 0;
-        for beam in scan.beams() {
-            let ok = beam.valid & beam.range_m.is_finite() & beam.angle_rad.is_finite();
-            // `len` counts valid beams before this one, so it is below N.
-            self.points[len] = Vec2::new(beam.range_m, 0.0);
-            self.bearings[len] = beam.angle_rad;
-            len += usize::from(ok);
-        }
+        let len = points_of_valid_beams(scan.beams(), &mut self.points, &mut self.bearings);
         self.len = len;
         // The vectorised check says whether; the scalar one, only on a refused scan, says where.
         if !self.in_angular_order() {
@@ -132,7 +121,6 @@ impl<const N: usize> PreparedScan<N> {
                 return Err(PrepareError::BeamsNotInAngularOrder { beam });
             }
         }
-        ranges_to_points(&mut self.points[..len], &self.bearings[..len]);
         let span = if self.len > 1 {
             self.bearings[self.len - 1] - self.bearings[0]
         } else {
@@ -449,31 +437,61 @@ impl<const N: usize> PreparedScan<N> {
     }
 }
 
-/// Turns the ranges waiting in `points`' x into points at `bearings`, four beams at a time
-/// ([`sin_cos_x4`], bit-identical to the scalar [`sin_cos`] of the last few). Out of line: the
-/// compiler kept the loop scalar when it was inlined into `load`.
-#[inline(never)]
-fn ranges_to_points(points: &mut [Vec2], bearings: &[f32]) {
-    let mut quads = points.chunks_exact_mut(4);
-    let mut angles = bearings.chunks_exact(4);
-    for (p, a) in (&mut quads).zip(&mut angles) {
-        let range = f32x4::from([p[0].x, p[1].x, p[2].x, p[3].x]);
-        let (sin, cos) = sin_cos_x4(f32x4::from([a[0], a[1], a[2], a[3]]));
+/// Writes the valid beams' points and angles to the front of `points` and `bearings` and
+/// returns how many there are, four beams at a time: finiteness tests, sines and cosines
+/// ([`sin_cos_x4`], whose lanes give the scalar [`sin_cos`]'s bits) in lanes; four valid beams,
+/// the usual case, are stored at once, and otherwise each beam is written to the next free
+/// slot, which only a valid beam keeps. (Validating with a branch per beam, then turning
+/// ranges into points in a loop of their own, took 49 instructions a beam.) `points` and
+/// `bearings` must be at least as long as `beams`.
+fn points_of_valid_beams(beams: &[Beam], points: &mut [Vec2], bearings: &mut [f32]) -> usize {
+    let mut len = 0;
+    let mut quads = beams.chunks_exact(4);
+    for q in &mut quads {
+        let range = f32x4::from([q[0].range_m, q[1].range_m, q[2].range_m, q[3].range_m]);
+        let angle = [
+            q[0].angle_rad,
+            q[1].angle_rad,
+            q[2].angle_rad,
+            q[3].angle_rad,
+        ];
+        let finite = (range.is_finite() & f32x4::from(angle).is_finite()).move_mask();
+        let flags = q
+            .iter()
+            .enumerate()
+            .fold(0, |f, (i, b)| f | i32::from(b.valid) << i);
+        let (sin, cos) = sin_cos_x4(f32x4::from(angle));
         let (x, y) = ((range * cos).to_array(), (range * sin).to_array());
-        for (i, p) in p.iter_mut().enumerate() {
-            *p = Vec2::new(x[i], y[i]);
+        let keep = finite & flags;
+        // `len` counts the valid beams before these four, so it is at most their first index.
+        if keep == 0b1111 {
+            let (p, a) = (&mut points[len..len + 4], &mut bearings[len..len + 4]);
+            for i in 0..4 {
+                p[i] = Vec2::new(x[i], y[i]);
+            }
+            a.copy_from_slice(&angle);
+            len += 4;
+        } else {
+            for i in 0..4 {
+                points[len] = Vec2::new(x[i], y[i]);
+                bearings[len] = angle[i];
+                len += (keep >> i & 1) as usize;
+            }
         }
     }
-    for (p, &a) in quads.into_remainder().iter_mut().zip(angles.remainder()) {
-        let (sin, cos) = sin_cos(a);
-        *p = Vec2::new(p.x * cos, p.x * sin);
+    for beam in quads.remainder() {
+        let (sin, cos) = sin_cos(beam.angle_rad);
+        points[len] = Vec2::new(beam.range_m * cos, beam.range_m * sin);
+        bearings[len] = beam.angle_rad;
+        len += usize::from(beam.valid & beam.range_m.is_finite() & beam.angle_rad.is_finite());
     }
+    len
 }
 
 /// The first valid beam whose bearing from the first valid beam is below its predecessor's or
 /// beyond a turn; the slow path of [`PreparedScan::load`], taken only for a scan it refuses.
 #[cold]
-fn first_out_of_order(beams: &[crate::scan::Beam]) -> Option<usize> {
+fn first_out_of_order(beams: &[Beam]) -> Option<usize> {
     let mut first = None;
     let mut prev = f32::NEG_INFINITY;
     for (i, beam) in beams.iter().enumerate() {
