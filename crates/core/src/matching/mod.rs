@@ -16,6 +16,7 @@ mod odometry;
 mod prepared;
 mod recovery;
 mod result;
+mod window;
 
 pub use config::{MatchConfig, MatcherKind};
 pub use icl_paper::closest_point_on_line;
