@@ -9,6 +9,7 @@ mod config;
 mod driver;
 pub(crate) mod fast_math;
 mod icl_paper;
+mod line_sums;
 mod linalg;
 pub mod local_map;
 mod metrics;
