@@ -48,13 +48,15 @@ pub fn nearest_of_six(window: &[Vec2; 6], q: Vec2) -> Option<(usize, f32)> {
     if both.cmp_eq(both).move_mask() != 0b1111 {
         return argmin(window.iter().map(|p| (*p - q).norm_squared()));
     }
+    // The least in every lane: of lanes 0 and 2 and of 1 and 3, then of the two.
     let m = low.fast_min(high).to_array();
-    let least = |a: f32, b: f32| if a < b { a } else { b };
-    let d2 = least(least(m[0], m[1]), least(m[2], m[3]));
+    let m = f32x4::new(m).fast_min(f32x4::new([m[2], m[3], m[0], m[1]]));
+    let m = m.to_array();
+    let at = f32x4::new(m).fast_min(f32x4::new([m[1], m[0], m[3], m[2]]));
+    let d2 = at.to_array()[0];
     if d2 == f32::INFINITY {
         return None;
     }
-    let at = f32x4::splat(d2);
     // Points 2 and 3 are in both vectors; either vote finds them first.
     let hits = low.cmp_eq(at).move_mask() | (high.cmp_eq(at).move_mask() << 2);
     Some((hits.trailing_zeros() as usize, d2))
