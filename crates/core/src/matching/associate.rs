@@ -5,6 +5,7 @@
 use super::config::MatchConfig;
 use super::linalg::Sym3;
 use super::prepared::PreparedScan;
+use super::window::usual_query;
 use crate::geom::{Pose2, Vec2};
 
 /// What a metric contributes: how it pairs a point and how it sums pairs for its solver.
@@ -209,9 +210,17 @@ pub fn point_by_point<M: Metric, const N: usize>(pass: &Pass<N>) -> (Tally, M) {
 fn find_partners<const N: usize>(pass: &Pass<N>, slots: &mut [u16], reuse: bool) {
     let half = pass.cfg.search_half_window as usize;
     let t = pass.pose.translation();
+    let reference = pass.reference.points();
     let mut hint = 0;
     for (&p, slot) in pass.points.iter().zip(slots.iter_mut()) {
         let q = pass.rotated(p) + t;
+        if !reuse && half == 3 {
+            if let Some((k, j)) = usual_query(reference, q, hint) {
+                hint = k;
+                *slot = j.map_or(NO_PARTNER, |j| j as u16);
+                continue;
+            }
+        }
         let k = match *slot {
             k if reuse && k != NO_PARTNER => Some(k as usize),
             _ => pass.reference.project(q, hint).inspect(|&k| hint = k),

@@ -282,27 +282,18 @@ impl<const N: usize> PreparedScan<N> {
     /// between two points that are not both within a quarter turn of `q`.
     ///
     /// A step looks at the points either side of `k`, their cross and dot products with `q`
-    /// in one four-lane vector (rounded exactly as [`Vec2::cross`] and [`Vec2::dot`] round them).
-    /// Queries come one beam apart, so the walk usually moves up once and stops: the pair the
-    /// second step looks at also tells whether the first moves up, and one vector does both.
+    /// in one four-lane vector ([`super::window::crosses_dots`]). Queries come one beam apart,
+    /// so the walk usually moves up once and stops: the pair the second step looks at also
+    /// tells whether the first moves up, and one vector does both.
     #[inline(always)]
     fn walk(&self, q: Vec2, hint: usize) -> Option<usize> {
-        use wide::{f32x4, CmpGe, CmpGt};
+        use wide::{f32x4, CmpGe};
         let p = &self.points[..self.len];
-        let (across, along, zero) = (
-            f32x4::new([q.y, q.x, q.y, q.x]),
-            f32x4::new([q.x, q.y, q.x, q.y]),
-            f32x4::splat(0.0),
-        );
+        let zero = f32x4::splat(0.0);
         // Cross and dot products of the points before and at `k`, and which are positive.
         let pair = |k: usize| {
             let [before, at] = *<&[Vec2; 2]>::try_from(p.get(k.wrapping_sub(1)..=k)?).ok()?;
-            let xy = f32x4::new([before.x, before.y, at.x, at.y]);
-            let (a, b) = ((xy * across).to_array(), (xy * along).to_array());
-            // x qy - y qx and x qx + y qy (as x qx - -(y qy), which rounds the same).
-            let crosses_dots =
-                f32x4::new([a[0], a[2], b[0], b[2]]) - f32x4::new([a[1], a[3], -b[1], -b[3]]);
-            Some((crosses_dots, crosses_dots.cmp_gt(zero).move_mask()))
+            Some(super::window::crosses_dots(before, at, q))
         };
         // Both points of the last pair within a quarter turn of `q`.
         let ahead = |positive: i32| positive & 0b1100 == 0b1100;
