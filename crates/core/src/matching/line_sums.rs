@@ -130,12 +130,15 @@ fn add_four<const N: usize>(
     let inliers = inlier.move_mask();
     sums.inliers += inliers.count_ones() as u16;
     sums.rejected_dynamic += dynamic.move_mask().count_ones() as u16;
-    // Outliers fall in bin 0 and add nothing there.
-    let bins = ((r.abs() * f32x4::splat(pass.bins_per_m)) & inlier)
+    // The last bin as a float before truncating, which truncates to the same bin as the
+    // integer minimum after it would (inliers' |r| are finite); outliers fall in bin 0 and add
+    // nothing there. The mask of the index changes nothing but spares a bounds check.
+    let last = f32x4::splat((HIST_BINS - 1) as f32);
+    let bins = ((r.abs() * f32x4::splat(pass.bins_per_m)).fast_min(last) & inlier)
         .fast_trunc_int()
         .to_array();
     for (i, &bin) in bins.iter().enumerate() {
-        let bin = bin.min(HIST_BINS as i32 - 1) as usize;
+        let bin = bin as usize & (HIST_BINS - 1);
         hist[bin] = hist[bin].saturating_add((inliers >> i) as u16 & 1);
     }
 }
