@@ -5,7 +5,7 @@
 use super::config::MatchConfig;
 use super::linalg::Sym3;
 use super::prepared::PreparedScan;
-use super::window::usual_query;
+use super::window::{nearest_around, six_around, usual_query};
 use crate::geom::{Pose2, Vec2};
 
 /// What a metric contributes: how it pairs a point and how it sums pairs for its solver.
@@ -214,8 +214,16 @@ fn find_partners<const N: usize>(pass: &Pass<N>, slots: &mut [u16], reuse: bool)
     let mut hint = 0;
     for (&p, slot) in pass.points.iter().zip(slots.iter_mut()) {
         let q = pass.rotated(p) + t;
-        if !reuse && half == 3 {
-            if let Some((k, j)) = usual_query(reference, q, hint) {
+        // The usual queries in one go, without the general path's checks and branches: a
+        // window inside the scan around the old partner, or where the walk moves up one point.
+        if half == 3 {
+            let old = *slot as usize;
+            if reuse && *slot != NO_PARTNER {
+                if let Some(window) = six_around(reference, old) {
+                    *slot = nearest_around(window, old, q).map_or(NO_PARTNER, |j| j as u16);
+                    continue;
+                }
+            } else if let Some((k, j)) = usual_query(reference, q, hint) {
                 hint = k;
                 *slot = j.map_or(NO_PARTNER, |j| j as u16);
                 continue;

@@ -377,13 +377,10 @@ impl<const N: usize> PreparedScan<N> {
     pub fn nearest_in_window(&self, q: Vec2, k: usize, half_window: usize) -> Option<(usize, f32)> {
         // The usual case, inlined into every association: the default window (3 a side) inside
         // the scan, as a fixed-length array searched in four-lane SIMD.
-        let from = k.wrapping_sub(half_window);
-        let window = self.points[..self.len].get(from..k + half_window);
-        match window.map(<&[Vec2; 6]>::try_from) {
-            Some(Ok(window)) => {
-                super::window::nearest_of_six(window, q).map(|(j, d2)| (from + j, d2))
-            }
-            _ => self.nearest_in_pieces(q, k, half_window),
+        let six = super::window::six_around(&self.points[..self.len], k);
+        match six.filter(|_| half_window == 3) {
+            Some(window) => super::window::nearest_of_six(window, q).map(|(j, d2)| (k - 3 + j, d2)),
+            None => self.nearest_in_pieces(q, k, half_window),
         }
     }
 

@@ -44,13 +44,23 @@ pub fn argmin(values: impl Iterator<Item = f32>) -> Option<(usize, f32)> {
 /// branches (about 50 of its 130 instructions).
 #[inline(always)]
 pub fn usual_query(points: &[Vec2], q: Vec2, hint: usize) -> Option<(usize, Option<usize>)> {
-    let window: &[Vec2; 6] = points
-        .get(hint.wrapping_sub(2)..hint + 4)?
-        .try_into()
-        .ok()?;
+    let k = hint + 1;
+    let window = six_around(points, k)?;
     let (_, positive) = crosses_dots(window[2], window[3], q);
-    let nearest = || nearest_of_six(window, q).map(|(j, _)| hint - 2 + j);
-    (positive == 0b1101).then(|| (hint + 1, nearest()))
+    (positive == 0b1101).then(|| (k, nearest_around(window, k, q)))
+}
+
+/// The default search window around `k` (points `k - 3` to `k + 2`), when it lies inside
+/// `points`.
+#[inline(always)]
+pub fn six_around(points: &[Vec2], k: usize) -> Option<&[Vec2; 6]> {
+    points.get(k.wrapping_sub(3)..k + 3)?.try_into().ok()
+}
+
+/// The index of the point nearest to `q` in `window`, the six points around `k`.
+#[inline(always)]
+pub fn nearest_around(window: &[Vec2; 6], k: usize, q: Vec2) -> Option<usize> {
+    nearest_of_six(window, q).map(|(j, _)| k - 3 + j)
 }
 
 /// Index and squared distance of the point of `window` nearest to `q` by [`argmin`]'s rule,
@@ -141,8 +151,8 @@ mod tests {
     }
 
     proptest! {
-        /// Where the usual query answers, it answers what the projection and the window search
-        /// answer (from hints at, before and after the projection's answer, on points in
+        /// Where the usual queries answer, they answer what the projection and the window
+        /// search answer (from hints at, before and after the projection's answer, on points in
         /// angular order and, past a wall's end, not).
         #[test]
         fn the_usual_query_answers_as_the_projection_and_window_search(
@@ -157,6 +167,11 @@ mod tests {
             if let Some((k, nearest)) = usual_query(p.points(), q, hint) {
                 prop_assert_eq!(p.project(q, hint), Some(k));
                 prop_assert_eq!(p.nearest_in_window(q, k, 3).map(|(j, _)| j), nearest);
+            }
+            // A later pass's search around an old partner (the hint here).
+            if let Some(window) = six_around(p.points(), hint) {
+                let searched = p.nearest_in_window(q, hint, 3).map(|(j, _)| j);
+                prop_assert_eq!(nearest_around(window, hint, q), searched);
             }
         }
     }
