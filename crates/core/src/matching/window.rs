@@ -36,17 +36,32 @@ pub fn argmin(values: impl Iterator<Item = f32>) -> Option<(usize, f32)> {
 }
 
 /// The usual query of a pass that projects, in one go: `Some((k, nearest))` when the
-/// projection's walk from `hint` moves up one point and stops (its first two steps: point `hint`
-/// below the bearing of `q`, point `hint + 1` not, both within a quarter turn of `q`), so that
-/// `PreparedScan::project` answers `k = hint + 1`, and the default window around `k` (three
-/// points a side) lies inside the scan, where `PreparedScan::nearest_in_window` answers
-/// `nearest`. `None` otherwise: ask those two. Spares the usual query their bounds checks and
-/// branches (about 50 of its 130 instructions).
+/// projection's walk from `hint` stops within a step of `hint + 1`, so that
+/// `PreparedScan::project` answers `k`, and the default window around `k` (three points a side)
+/// lies inside the scan, where `PreparedScan::nearest_in_window` answers `nearest`. `None`
+/// otherwise: ask those two. Spares the usual query their bounds checks and branches (about 50
+/// of its 130 instructions).
+///
+/// The walk stops at `k` when point `k - 1` is below the bearing of `q`, point `k` is not, and
+/// both are within a quarter turn of `q` (`crosses_dots` mask `0b1101`), and it gets there
+/// from `hint` when `k = hint + 1` (the usual case: queries come a beam apart), when
+/// `k = hint` (the walk's first step does not move up: point `hint` is not below `q`), or when
+/// `k = hint + 2` (it moves up twice: points `hint` and `hint + 1` are below `q`).
 #[inline(always)]
 pub fn usual_query(points: &[Vec2], q: Vec2, hint: usize) -> Option<(usize, Option<usize>)> {
-    let k = hint + 1;
-    let window = six_around(points, k)?;
-    let (_, positive) = crosses_dots(window[2], window[3], q);
+    let stop = |k: usize| {
+        let window = six_around(points, k)?;
+        let (_, positive) = crosses_dots(window[2], window[3], q);
+        Some((positive, window))
+    };
+    let (positive, window) = stop(hint + 1)?;
+    let k = match positive {
+        0b1101 => return Some((hint + 1, nearest_around(window, hint + 1, q))),
+        m if m & 0b01 == 0 => hint,
+        m if m & 0b11 == 0b11 => hint + 2,
+        _ => return None,
+    };
+    let (positive, window) = stop(k)?;
     (positive == 0b1101).then(|| (k, nearest_around(window, k, q)))
 }
 
@@ -177,16 +192,18 @@ mod tests {
     }
 
     #[test]
-    fn the_usual_query_answers_a_query_one_beam_on() {
+    fn the_usual_query_answers_from_a_step_either_side() {
         let p = room(&[2.0; 360]);
         // A third of a degree past the beam at 20 degrees: projects to the next beam from the
         // one before, and is nearer the one before.
         let a = 20.3f32.to_radians();
         let q = Vec2::new(2.0 * libm::cosf(a), 2.0 * libm::sinf(a));
         let k = p.project(q, 0).unwrap();
-        assert_eq!(usual_query(p.points(), q, k - 1), Some((k, Some(k - 1))));
-        // Not from the answer itself (the walk's first step does not move up there).
-        assert_eq!(usual_query(p.points(), q, k), None);
+        for hint in [k - 2, k - 1, k] {
+            assert_eq!(usual_query(p.points(), q, hint), Some((k, Some(k - 1))));
+        }
+        // Not from three points back (the general walk's business).
+        assert_eq!(usual_query(p.points(), q, k - 3), None);
     }
 
     #[test]
