@@ -5,6 +5,7 @@
 use super::config::MatchConfig;
 use super::linalg::Sym3;
 use super::prepared::PreparedScan;
+use super::window::{nearest_around, six_around, usual_query};
 use crate::geom::{Pose2, Vec2};
 
 /// What a metric contributes: how it pairs a point and how it sums pairs for its solver.
@@ -22,6 +23,11 @@ pub trait Metric: Default {
     ) -> Option<(Vec2, Vec2)>;
     /// Sums one weighted pair (`p` in the current frame, `q` = pose applied to `p`).
     fn add(&mut self, p: Vec2, q: Vec2, target: Vec2, normal: Vec2, w: f32, pose: Pose2);
+    /// Gates, weighs and sums a pass whose partners are found: point by point through
+    /// [`Metric::pair`] and [`Metric::add`], unless the metric has a faster way to the same sums.
+    fn sums<const N: usize>(pass: &Pass<N>) -> (Tally, Self) {
+        point_by_point(pass)
+    }
 }
 
 /// Residual of a pair: distance to the point for a point-to-point metric, else to the line.
@@ -48,7 +54,7 @@ pub struct PassStats {
 }
 
 /// Bins of the residual histogram that gives the median without sorting or storing residuals.
-const HIST_BINS: usize = 32;
+pub const HIST_BINS: usize = 32;
 
 /// How the pass gates and weights.
 #[derive(Clone, Copy)]
@@ -73,6 +79,44 @@ pub struct Partners<'a> {
     pub reuse: bool,
 }
 
+/// A pass whose partners are found, and how it gates and weighs them.
+pub struct Pass<'a, const N: usize> {
+    pub reference: &'a PreparedScan<N>,
+    pub points: &'a [Vec2],
+    /// Each point's partner in `reference`, or [`NO_PARTNER`].
+    pub slots: &'a [u16],
+    pub pose: Pose2,
+    pub cfg: &'a MatchConfig,
+    /// Sine and cosine of the pose's heading.
+    pub sin: f32,
+    pub cos: f32,
+    /// Squared gates: on the distance to the partner, and on the residual.
+    pub point_gate2: f32,
+    pub gate2: f32,
+    /// Seed 000 sec. 4.2 threshold on r², infinite when the test is off (no r² exceeds it).
+    pub dynamic2: f32,
+    /// 1 / (Cauchy kernel width)².
+    pub inv_k2: f32,
+    /// Residual histogram bins per metre.
+    pub bins_per_m: f32,
+}
+
+impl<const N: usize> Pass<'_, N> {
+    /// `p` rotated by the pose's heading (not yet translated).
+    #[inline(always)]
+    pub fn rotated(&self, p: Vec2) -> Vec2 {
+        let (s, c) = (self.sin, self.cos);
+        Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y)
+    }
+}
+
+/// A pass's statistics (all but the robust sigma) and its residual histogram.
+#[derive(Default)]
+pub struct Tally {
+    pub stats: PassStats,
+    pub hist: [u16; HIST_BINS],
+}
+
 pub fn associate<M: Metric, const N: usize>(
     reference: &PreparedScan<N>,
     current: &PreparedScan<N>,
@@ -81,48 +125,69 @@ pub fn associate<M: Metric, const N: usize>(
     cfg: &MatchConfig,
     partners: Partners,
 ) -> (PassStats, M) {
-    let (s, c) = (libm::sinf(pose.theta), libm::cosf(pose.theta));
-    let moved = |p: Vec2| Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
     let points = current.points();
-    let slots = &mut partners.slots[..points.len()];
-    find_partners(reference, points, moved, pose, cfg, slots, partners.reuse);
-    // The sums in a loop of their own, with no calls in it, so they stay in registers.
-    let mut stats = PassStats::default();
-    let mut acc = M::default();
-    let mut hist = [0u16; HIST_BINS];
     let bin_width = gate.gate_m / HIST_BINS as f32;
-    let bins_per_m = 1.0 / bin_width;
-    let gate2 = gate.gate_m * gate.gate_m;
-    let point_gate2 = cfg.max_correspondence_m * cfg.max_correspondence_m;
-    let inv_k2 = 1.0 / (gate.kernel_m * gate.kernel_m);
-    for (&p, &j) in points.iter().zip(slots.iter()) {
+    let pass = Pass {
+        reference,
+        points,
+        // Filled in below, once the partners are found.
+        slots: &[],
+        pose,
+        cfg,
+        sin: libm::sinf(pose.theta),
+        cos: libm::cosf(pose.theta),
+        point_gate2: cfg.max_correspondence_m * cfg.max_correspondence_m,
+        gate2: gate.gate_m * gate.gate_m,
+        dynamic2: gate.dynamic_threshold_m2.unwrap_or(f32::INFINITY),
+        inv_k2: 1.0 / (gate.kernel_m * gate.kernel_m),
+        bins_per_m: 1.0 / bin_width,
+    };
+    let slots = &mut partners.slots[..points.len()];
+    find_partners(&pass, slots, partners.reuse);
+    let pass = Pass {
+        slots: &*slots,
+        ..pass
+    };
+    let (Tally { mut stats, hist }, acc) = M::sums(&pass);
+    stats.robust_sigma = 1.4826 * histogram_median(&hist, stats.inliers, bin_width);
+    (stats, acc)
+}
+
+/// [`Metric::sums`] point by point. In a loop of its own, with no calls in it, so the sums stay
+/// in registers.
+pub fn point_by_point<M: Metric, const N: usize>(pass: &Pass<N>) -> (Tally, M) {
+    let mut tally = Tally::default();
+    let stats = &mut tally.stats;
+    let mut acc = M::default();
+    let t = pass.pose.translation();
+    for (&p, &j) in pass.points.iter().zip(pass.slots) {
         if j == NO_PARTNER {
             continue;
         }
         let j = j as usize;
-        let rp = moved(p);
-        let q = rp + pose.translation();
+        let rp = pass.rotated(p);
+        let q = rp + t;
         // Exactly the distance the search found (finite: the search skips NaN and infinity).
-        if (q - reference.point(j)).norm_squared() > point_gate2 {
+        if (q - pass.reference.point(j)).norm_squared() > pass.point_gate2 {
             continue;
         }
-        let Some((target, normal)) = M::pair(reference, j, q, cfg) else {
+        let Some((target, normal)) = M::pair(pass.reference, j, q, pass.cfg) else {
             continue;
         };
         let r = residual::<M>(q, target, normal);
         let r2 = r * r;
-        if gate.dynamic_threshold_m2.is_some_and(|t| r2 > t) {
+        if r2 > pass.dynamic2 {
             stats.rejected_dynamic += 1;
             continue;
         }
-        if r2 > gate2 {
+        if r2 > pass.gate2 {
             continue;
         }
-        let w = 1.0 / (1.0 + r2 * inv_k2);
-        acc.add(p, q, target, normal, w, pose);
+        let w = 1.0 / (1.0 + r2 * pass.inv_k2);
+        acc.add(p, q, target, normal, w, pass.pose);
         // |r| is within the gate, so the bin is too (but for rounding at its very edge).
-        let bin = ((r.abs() * bins_per_m) as i32).min(HIST_BINS as i32 - 1) as usize;
-        hist[bin] = hist[bin].saturating_add(1);
+        let bin = ((r.abs() * pass.bins_per_m) as i32).min(HIST_BINS as i32 - 1) as usize;
+        tally.hist[bin] = tally.hist[bin].saturating_add(1);
         stats.inliers += 1;
         stats.weighted_sq_sum += w * r2;
         stats.weight_sum += w;
@@ -137,30 +202,38 @@ pub fn associate<M: Metric, const N: usize>(
                 .add_outer([normal.x, normal.y, normal.dot(drp)], w);
         }
     }
-    stats.robust_sigma = 1.4826 * histogram_median(&hist, stats.inliers, bin_width);
-    (stats, acc)
+    (tally, acc)
 }
 
 /// Each point's nearest reference point (or [`NO_PARTNER`]) into `slots`: searched around the
 /// slot's old partner when `reuse`, else around the point's bearing.
-fn find_partners<const N: usize>(
-    reference: &PreparedScan<N>,
-    points: &[Vec2],
-    moved: impl Fn(Vec2) -> Vec2,
-    pose: Pose2,
-    cfg: &MatchConfig,
-    slots: &mut [u16],
-    reuse: bool,
-) {
-    let half = cfg.search_half_window as usize;
+fn find_partners<const N: usize>(pass: &Pass<N>, slots: &mut [u16], reuse: bool) {
+    let half = pass.cfg.search_half_window as usize;
+    let t = pass.pose.translation();
+    let reference = pass.reference.points();
     let mut hint = 0;
-    for (&p, slot) in points.iter().zip(slots.iter_mut()) {
-        let q = moved(p) + pose.translation();
+    for (&p, slot) in pass.points.iter().zip(slots.iter_mut()) {
+        let q = pass.rotated(p) + t;
+        // The usual queries in one go, without the general path's checks and branches: a
+        // window inside the scan around the old partner, or where the walk moves up one point.
+        if half == 3 {
+            let old = *slot as usize;
+            if reuse && *slot != NO_PARTNER {
+                if let Some(window) = six_around(reference, old) {
+                    *slot = nearest_around(window, old, q).map_or(NO_PARTNER, |j| j as u16);
+                    continue;
+                }
+            } else if let Some((k, j)) = usual_query(reference, q, hint) {
+                hint = k;
+                *slot = j.map_or(NO_PARTNER, |j| j as u16);
+                continue;
+            }
+        }
         let k = match *slot {
             k if reuse && k != NO_PARTNER => Some(k as usize),
-            _ => reference.project(q, hint).inspect(|&k| hint = k),
+            _ => pass.reference.project(q, hint).inspect(|&k| hint = k),
         };
-        let found = k.and_then(|k| reference.nearest_in_window(q, k, half));
+        let found = k.and_then(|k| pass.reference.nearest_in_window(q, k, half));
         *slot = found.map_or(NO_PARTNER, |(j, _)| j as u16);
     }
 }

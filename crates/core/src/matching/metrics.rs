@@ -1,9 +1,10 @@
 //! The three solvers behind `icl`, `plicp` and `icp`: how each pairs a point and how it turns
 //! the summed pairs into a new pose.
 
-use super::associate::{Metric, PassStats};
+use super::associate::{Metric, Pass, PassStats, Tally};
 use super::config::MatchConfig;
 use super::linalg::sym2_eigen;
+use super::line_sums::line_sums;
 use super::prepared::PreparedScan;
 use crate::geom::{Pose2, Vec2};
 use libm::{atan2f, sqrtf};
@@ -20,7 +21,7 @@ pub trait Solve: Metric {
 /// Gauss-Newton step per pass. The Hessian is the pass's information matrix.
 #[derive(Default)]
 pub struct PointToLineGaussNewton {
-    gradient: [f32; 3],
+    pub(super) gradient: [f32; 3],
 }
 
 impl Metric for PointToLineGaussNewton {
@@ -43,6 +44,12 @@ impl Metric for PointToLineGaussNewton {
         self.gradient[0] += w * n.x * res;
         self.gradient[1] += w * n.y * res;
         self.gradient[2] += w * jt * res;
+    }
+
+    /// Four points at a time in SIMD lanes, to the same sums ([`line_sums`]).
+    fn sums<const N: usize>(pass: &Pass<N>) -> (Tally, Self) {
+        let (tally, gradient) = line_sums(pass);
+        (tally, Self { gradient })
     }
 }
 

@@ -10,6 +10,7 @@ mod driver;
 pub(crate) mod fast_math;
 mod fit_lanes;
 mod icl_paper;
+mod line_sums;
 mod linalg;
 pub mod local_map;
 mod metrics;
@@ -17,6 +18,7 @@ mod odometry;
 mod prepared;
 mod recovery;
 mod result;
+mod window;
 
 pub use config::{MatchConfig, MatcherKind};
 pub use icl_paper::closest_point_on_line;

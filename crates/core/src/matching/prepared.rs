@@ -322,20 +322,41 @@ impl<const N: usize> PreparedScan<N> {
     /// cross product is positive) while the two are less than a half turn apart. `None` (ask
     /// [`Self::project_by_bearing`]) when the walk gets long, reaches an end of the scan, or ends
     /// between two points that are not both within a quarter turn of `q`.
+    ///
+    /// A step looks at the points either side of `k`, their cross and dot products with `q`
+    /// in one four-lane vector ([`super::window::crosses_dots`]). Queries come one beam apart,
+    /// so the walk usually moves up once and stops: the pair the second step looks at also
+    /// tells whether the first moves up, and one vector does both.
     #[inline(always)]
     fn walk(&self, q: Vec2, hint: usize) -> Option<usize> {
+        use wide::{f32x4, CmpGe};
         let p = &self.points[..self.len];
-        let mut k = hint;
-        for _ in 0..8 {
-            let (Some(&before), Some(&at)) = (p.get(k.wrapping_sub(1)), p.get(k)) else {
-                return None;
-            };
-            if at.cross(q) > 0.0 {
+        let zero = f32x4::splat(0.0);
+        // Cross and dot products of the points before and at `k`, and which are positive.
+        let pair = |k: usize| {
+            let [before, at] = *<&[Vec2; 2]>::try_from(p.get(k.wrapping_sub(1)..=k)?).ok()?;
+            Some(super::window::crosses_dots(before, at, q))
+        };
+        // Both points of the last pair within a quarter turn of `q`.
+        let ahead = |positive: i32| positive & 0b1100 == 0b1100;
+        let (mut k, mut steps) = (hint, 8);
+        // The first step (whose pair is `hint - 1, hint`) moves up when `hint` is below `q`.
+        if hint > 0 {
+            if let Some((_, positive)) = pair(hint + 1).filter(|&(_, m)| m & 0b01 != 0) {
+                if positive & 0b10 == 0 {
+                    return ahead(positive).then_some(hint + 1);
+                }
+                (k, steps) = (hint + 2, 6);
+            }
+        }
+        for _ in 0..steps {
+            let (crosses_dots, positive) = pair(k)?;
+            if positive & 0b10 != 0 {
                 k += 1;
-            } else if before.cross(q) <= 0.0 {
+            } else if zero.cmp_ge(crosses_dots).move_mask() & 0b01 != 0 {
                 k -= 1;
             } else {
-                return (at.dot(q) > 0.0 && before.dot(q) > 0.0).then_some(k);
+                return ahead(positive).then_some(k);
             }
         }
         None
@@ -397,15 +418,11 @@ impl<const N: usize> PreparedScan<N> {
     #[inline(always)]
     pub fn nearest_in_window(&self, q: Vec2, k: usize, half_window: usize) -> Option<(usize, f32)> {
         // The usual case, inlined into every association: the default window (3 a side) inside
-        // the scan, as a fixed-length array whose distances become straight-line code.
-        let from = k.wrapping_sub(half_window);
-        let window = self.points[..self.len].get(from..k + half_window);
-        match window.map(<&[Vec2; 6]>::try_from) {
-            Some(Ok(window)) => {
-                let d2: [f32; 6] = core::array::from_fn(|j| (window[j] - q).norm_squared());
-                argmin(d2.into_iter()).map(|(j, d2)| (from + j, d2))
-            }
-            _ => self.nearest_in_pieces(q, k, half_window),
+        // the scan, as a fixed-length array searched in four-lane SIMD.
+        let six = super::window::six_around(&self.points[..self.len], k);
+        match six.filter(|_| half_window == 3) {
+            Some(window) => super::window::nearest_of_six(window, q).map(|(j, d2)| (k - 3 + j, d2)),
+            None => self.nearest_in_pieces(q, k, half_window),
         }
     }
 
@@ -427,7 +444,7 @@ impl<const N: usize> PreparedScan<N> {
         for (from, to) in pieces {
             let (from, to) = (from.clamp(0, n) as usize, to.clamp(0, n) as usize);
             let piece = self.points[from..to].iter();
-            if let Some((j, d2)) = argmin(piece.map(|p| (*p - q).norm_squared())) {
+            if let Some((j, d2)) = super::window::argmin(piece.map(|p| (*p - q).norm_squared())) {
                 if best.is_none_or(|(_, b)| d2 < b) {
                     best = Some((from + j, d2));
                 }
@@ -507,18 +524,6 @@ fn first_out_of_order(beams: &[Beam]) -> Option<usize> {
     None
 }
 
-/// Index and value of the least of `values` (the first of equals), ignoring NaN and infinity.
-#[inline(always)]
-fn argmin(values: impl Iterator<Item = f32>) -> Option<(usize, f32)> {
-    let mut best = (0, f32::INFINITY);
-    for (j, d2) in values.enumerate() {
-        if d2 < best.1 {
-            best = (j, d2);
-        }
-    }
-    (best.1 < f32::INFINITY).then_some(best)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -563,6 +568,52 @@ mod tests {
         // (2, 0.02) is nearer the 1-degree beam (index 61, y = 0.035) than the 0-degree one.
         let (j, _) = p.nearest_in_window(Vec2::new(2.0, 0.02), 60, 3).unwrap();
         assert_eq!(j, 61);
+    }
+
+    /// The walk as written with scalars before its steps went into lanes: the rule they keep.
+    fn scalar_walk<const N: usize>(s: &PreparedScan<N>, q: Vec2, hint: usize) -> Option<usize> {
+        let p = s.points();
+        let mut k = hint;
+        for _ in 0..8 {
+            let (Some(&before), Some(&at)) = (p.get(k.wrapping_sub(1)), p.get(k)) else {
+                return None;
+            };
+            if at.cross(q) > 0.0 {
+                k += 1;
+            } else if before.cross(q) <= 0.0 {
+                k -= 1;
+            } else {
+                return (at.dot(q) > 0.0 && before.dot(q) > 0.0).then_some(k);
+            }
+        }
+        None
+    }
+
+    proptest::proptest! {
+        /// The lanes walk exactly as the scalar steps did: from every hint, over points in
+        /// angular order and in none (the walk then runs back and forth or out of steps), on
+        /// a coarse grid so that zero cross and dot products and ties are common.
+        #[test]
+        fn the_walk_in_lanes_takes_the_scalar_steps(
+            grid in proptest::collection::vec((-4i8..=4, -4i8..=4), 1..24),
+            qx in -4i8..=4, qy in -4i8..=4, scale in proptest::prop_oneof![proptest::strategy::Just(1.0f32), 0.01f32..30.0],
+            ordered in proptest::bool::ANY,
+        ) {
+            let mut p: PreparedScan<24> = PreparedScan {
+                len: grid.len(),
+                ..PreparedScan::default()
+            };
+            for (point, &(x, y)) in p.points.iter_mut().zip(&grid) {
+                *point = Vec2::new(x as f32, y as f32) * scale;
+            }
+            if ordered {
+                p.points[..p.len].sort_by(|a, b| libm::atan2f(a.y, a.x).total_cmp(&libm::atan2f(b.y, b.x)));
+            }
+            let q = Vec2::new(qx as f32, qy as f32) * scale;
+            for hint in 0..=p.len + 1 {
+                proptest::prop_assert_eq!(p.walk(q, hint), scalar_walk(&p, q, hint), "hint {}", hint);
+            }
+        }
     }
 
     fn ring_scan() -> Scan<360> {
