@@ -46,7 +46,10 @@ pub fn sin_cos(a: f32) -> (f32, f32) {
 
 /// [`sin_cos`] of four angles at once. Scan loading turns four beams at a time with it: the
 /// compiler's own vectorisation of a scalar loop left the quarter-turn reduction (a conversion
-/// and two selects a beam) scalar.
+/// and two selects a beam) scalar. Always inlined: left to the compiler, it became a call in
+/// scan loading, with its lanes passed through memory, whenever other code changed the
+/// inlining budget (about 5 k more instructions a 360-beam match).
+#[inline(always)]
 pub fn sin_cos_x4(a: f32x4) -> (f32x4, f32x4) {
     let half = a
         .cmp_lt(f32x4::ZERO)
