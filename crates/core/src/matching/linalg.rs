@@ -2,39 +2,21 @@
 //! tables): 2x2 symmetric eigen-decomposition and a damped 3x3 symmetric solve.
 
 use crate::geom::Vec2;
-use libm::sqrtf;
 use wide::{f32x4, CmpGe, CmpGt, CmpLe};
 
-/// Eigen-decomposition of `[[a, b], [b, c]]`: `(lambda_max, lambda_min, unit eigenvector of lambda_min)`.
+/// Eigen-decomposition of `[[a, b], [b, c]]`: `(lambda_max, lambda_min, unit eigenvector of
+/// lambda_min)`. One lane of [`sym2_eigen_lanes`], so a line fitted four at a time and one
+/// fitted alone (the local map's cells, the tests' fits by definition) get the same bits.
 pub fn sym2_eigen(a: f32, b: f32, c: f32) -> (f32, f32, Vec2) {
-    let mean = 0.5 * (a + c);
-    let half_diff = 0.5 * (a - c);
-    let radius = sqrtf(half_diff * half_diff + b * b);
-    let (hi, lo) = (mean + radius, mean - radius);
-    // Two algebraically equal candidates; the longer one is the numerically safe one.
-    let v1 = Vec2::new(b, lo - a);
-    let v2 = Vec2::new(lo - c, b);
-    let v = if v1.norm_squared() >= v2.norm_squared() {
-        v1
-    } else {
-        v2
-    };
-    let n = v.norm();
-    let dir = if n > 0.0 {
-        v * (1.0 / n)
-    } else if a <= c {
-        Vec2::new(1.0, 0.0)
-    } else {
-        Vec2::new(0.0, 1.0)
-    };
-    (hi, lo, dir)
+    let (hi, lo, x, y) = sym2_eigen_lanes(f32x4::splat(a), f32x4::splat(b), f32x4::splat(c));
+    let lane = |v: f32x4| v.to_array()[0];
+    (lane(hi), lane(lo), Vec2::new(lane(x), lane(y)))
 }
 
 /// [`sym2_eigen`] of four matrices at once, one per lane: `(lambda_max, lambda_min, eigenvector
-/// of lambda_min as x and y lanes)`. Each lane takes the same IEEE operations in the same order
-/// as the scalar function (SSE has no fused multiply-add to sneak in, and the square root and
-/// division are exact), so the answers are the scalar ones to the bit; the choice between the
-/// two candidate eigenvectors and the zero-vector fallback are masks instead of branches.
+/// of lambda_min as x and y lanes)`. Of the two algebraically equal eigenvector candidates the
+/// longer, numerically safe one is kept; a zero matrix or a multiple of the identity gets an
+/// axis. Choices are masks instead of branches.
 #[inline(always)]
 pub fn sym2_eigen_lanes(a: f32x4, b: f32x4, c: f32x4) -> (f32x4, f32x4, f32x4, f32x4) {
     let half = f32x4::splat(0.5);
@@ -213,8 +195,9 @@ mod tests {
     }
 
     proptest! {
-        /// Each lane of the four-lane decomposition is the scalar one, bit for bit, for lanes
-        /// that mix near-isotropic, axis-aligned and general matrices.
+        /// Each lane of the four-lane decomposition is its own matrix's answer, bit for bit (the
+        /// scalar function is one lane of a splat), for lanes that mix near-isotropic,
+        /// axis-aligned and general matrices: no lane takes another's candidate or axis.
         #[test]
         fn eigen_lanes_equal_the_scalar_eigen(m in proptest::array::uniform4((entry(), entry(), entry(), any::<bool>()))) {
             // Half the lanes isotropic-ish: c a hair from a.
