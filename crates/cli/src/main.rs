@@ -12,6 +12,7 @@ mod sim_closed_loop;
 mod sim_cmd;
 mod sim_plot;
 mod sim_world;
+mod slam_cmd;
 
 #[derive(Parser)]
 #[command(
@@ -28,6 +29,8 @@ struct Cli {
 enum Command {
     /// Scan-to-scan lidar odometry over a CARMEN log.
     Odometry(odometry_cmd::OdometryArgs),
+    /// Lidar SLAM over a CARMEN log: trajectory, pose graph and map.
+    Slam(slam_cmd::SlamArgs),
     /// Score a trajectory against a relations file (Kuemmerle et al. 2009).
     Eval(eval_cmd::EvalArgs),
     /// Lidar devices: decode raw captures, record from a serial port, plot a revolution.
@@ -40,6 +43,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: report::CliResult = match cli.command {
         Command::Odometry(args) => odometry_cmd::run(args),
+        Command::Slam(args) => slam_cmd::run(args),
         Command::Eval(args) => eval_cmd::run(args),
         Command::Lidar(args) => lidar_cmd::run(args),
         Command::Sim(args) => sim_cmd::run(args),

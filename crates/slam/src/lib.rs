@@ -3,3 +3,12 @@
 //! submaps and checked before they enter a pose graph, and an occupancy grid of the whole area
 //! for people and planners. It runs scan by scan online and the same way over a recorded log.
 #![forbid(unsafe_code)]
+
+pub mod config;
+pub mod correlative;
+pub mod keyframe;
+pub mod loops;
+pub mod slam;
+
+pub use config::{EdgeNoise, LoopConfig, SlamConfig};
+pub use slam::{local_map_cells, ScanPose, Slam, SlamStats};
