@@ -39,7 +39,8 @@ pub fn run(args: SlamArgs) -> CliResult {
         config.loops.max_candidates = 0;
     }
     let mut cells = local_map_cells(&config);
-    let mut slam: Slam<MAX_BEAMS> = Slam::new(config, &mut cells).map_err(|e| CliError(e.0))?;
+    let mut slam: Slam<MAX_BEAMS> =
+        Slam::new(config, &mut cells, true).map_err(|e| CliError(e.0))?;
     let bar = progress(log.scans.len() as u64, "slam");
     let mut anchors: Vec<(Option<usize>, Pose2)> = Vec::with_capacity(log.scans.len());
     let mut times_us = Vec::with_capacity(log.scans.len());
@@ -66,6 +67,11 @@ pub fn run(args: SlamArgs) -> CliResult {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    let tracking = slam.tracking_stats();
+    let finished = slam
+        .finish()
+        .ok_or_else(|| CliError("the SLAM back end stopped unexpectedly".into()))?;
+    let poses = finished.backend.poses();
     let trajectory: Vec<TrajectoryPoint> = log
         .scans
         .iter()
@@ -73,25 +79,27 @@ pub fn run(args: SlamArgs) -> CliResult {
         .map(|(rec, &(kf, rel))| TrajectoryPoint {
             timestamp_text: rec.timestamp_text.clone(),
             timestamp_s: rec.timestamp_s,
-            pose: OdomPose::from_f32(kf.map_or(rel, |k| slam.pose_of(k, rel))),
+            pose: OdomPose::from_f32(kf.map_or(rel, |k| poses[k].compose(rel))),
         })
         .collect();
     if let Some(path) = &args.out {
         write_file(path, |w| write_trajectory(w, &trajectory))?;
     }
     times_us.sort_by(f64::total_cmp);
-    let stats = slam.stats();
+    let stats = finished.backend.stats();
     let duration = log.scans.last().map_or(0.0, |l| l.timestamp_s)
         - log.scans.first().map_or(0.0, |f| f.timestamp_s);
     let wall_s = wall.elapsed().as_secs_f64();
     let summary = json!({
-        "scans": stats.scans,
-        "keyframes": slam.keyframes().len(),
+        "scans": tracking.scans,
+        "keyframes": stats.keyframes,
         "loop_candidates": stats.loop_candidates,
         "loop_closures_accepted": stats.loops_accepted,
         "loop_closures_rejected": stats.loops_rejected,
         "optimisations": stats.optimisations,
         "loop_rejections": stats.rejections,
+        "guess_searches_used": tracking.guess_searches_used,
+        "guess_searches_failed": tracking.guess_searches_failed,
         "wall_s": wall_s,
         "realtime_factor": duration / wall_s,
         "median_scan_us": percentile(&times_us, 0.5),

@@ -17,6 +17,7 @@ pub struct SlamConfig {
     /// searched only against frozen submaps that are not the newest ones.
     pub keyframes_per_submap: usize,
     pub loops: LoopConfig,
+    pub guard: GuardConfig,
     pub noise: EdgeNoise,
 }
 
@@ -35,6 +36,7 @@ impl Default for SlamConfig {
             local_map_size_m: 64.0,
             keyframes_per_submap: 20,
             loops: LoopConfig::default(),
+            guard: GuardConfig::default(),
             noise: EdgeNoise::default(),
         }
     }
@@ -108,6 +110,36 @@ impl Default for LoopConfig {
                 recovery: false,
                 ..MatchConfig::default()
             },
+        }
+    }
+}
+
+/// The check of the tracker's motion guess ([`crate::guard`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GuardConfig {
+    pub enabled: bool,
+    pub correlative: CorrelativeConfig,
+    /// A guess whose points' mean likelihood against the keyframe is at least this is kept.
+    pub min_guess_score: f32,
+    /// Otherwise the window searched around it, m and rad…
+    pub window_m: f32,
+    pub window_rad: f32,
+    /// …and a pose found there replaces it if it scores at least this…
+    pub min_found_score: f32,
+    /// …and this many times the guess's score.
+    pub min_gain: f32,
+}
+
+impl Default for GuardConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            correlative: CorrelativeConfig::default(),
+            min_guess_score: 0.3,
+            window_m: 1.0,
+            window_rad: std::f32::consts::PI,
+            min_found_score: 0.35,
+            min_gain: 1.5,
         }
     }
 }

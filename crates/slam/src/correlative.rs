@@ -153,15 +153,7 @@ impl LookupGrid {
         min_score: f32,
         config: &CorrelativeConfig,
     ) -> Option<Found> {
-        let near = |p: &Vec2| p.is_finite() && p.norm() <= config.max_range_m;
-        let count = points.iter().filter(|p| near(p)).count();
-        let stride = count.div_ceil(config.max_points.max(1)).max(1);
-        let scored: Vec<Vec2> = points
-            .iter()
-            .copied()
-            .filter(near)
-            .step_by(stride)
-            .collect();
+        let scored = self.scored_points(points, config);
         if scored.is_empty() {
             return None;
         }
@@ -235,6 +227,37 @@ impl LookupGrid {
             ),
             score: score as f32 / norm,
         })
+    }
+
+    /// Mean likelihood of `points` placed at `pose` on the fine grid, 0 to 1.
+    pub fn score_pose(&self, points: &[Vec2], pose: Pose2, config: &CorrelativeConfig) -> f32 {
+        let scored = self.scored_points(points, config);
+        if scored.is_empty() {
+            return 0.0;
+        }
+        let sum: u32 = scored
+            .iter()
+            .map(|&p| {
+                let q = pose.transform(p);
+                let x = ((q.x - self.origin.x) / self.resolution).floor() as i32;
+                let y = ((q.y - self.origin.y) / self.resolution).floor() as i32;
+                self.value(0, x, y) as u32
+            })
+            .sum();
+        sum as f32 / (255.0 * scored.len() as f32)
+    }
+
+    /// The points a search scores: finite, within range, thinned to at most `max_points`.
+    fn scored_points(&self, points: &[Vec2], config: &CorrelativeConfig) -> Vec<Vec2> {
+        let near = |p: &Vec2| p.is_finite() && p.norm() <= config.max_range_m;
+        let count = points.iter().filter(|p| near(p)).count();
+        let stride = count.div_ceil(config.max_points.max(1)).max(1);
+        points
+            .iter()
+            .copied()
+            .filter(near)
+            .step_by(stride)
+            .collect()
     }
 
     fn score(&self, cells: &[(i32, i32)], level: usize, ix: i32, iy: i32) -> u32 {

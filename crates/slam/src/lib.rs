@@ -4,11 +4,16 @@
 //! for people and planners. It runs scan by scan online and the same way over a recorded log.
 #![forbid(unsafe_code)]
 
+pub mod backend;
 pub mod config;
 pub mod correlative;
+pub mod guard;
 pub mod keyframe;
 pub mod loops;
 pub mod slam;
+pub mod tracker;
+pub mod worker;
 
-pub use config::{EdgeNoise, LoopConfig, SlamConfig};
-pub use slam::{local_map_cells, ScanPose, Slam, SlamStats};
+pub use config::{EdgeNoise, GuardConfig, LoopConfig, SlamConfig};
+pub use slam::{Finished, ScanPose, Slam, TrackingStats};
+pub use tracker::{local_map_cells, ConfigError};

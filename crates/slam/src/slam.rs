@@ -1,18 +1,17 @@
 //! The SLAM driver: one call per scan, online or over a log.
 //!
-//! Tracking is Plumbline's odometry with its rolling local map (scan-to-keyframe ICL, every
-//! keyframe aligned with the walls seen lately). Each keyframe becomes a pose-graph node tied
-//! to the previous one by the tracked motion; keyframes are grouped into submaps, and every new
-//! keyframe is checked against frozen submaps nearby for a loop. A verified loop adds an edge and
-//! the graph is optimised, which moves every keyframe, and with it every scan, since a scan's
-//! pose is its keyframe's graph pose composed with the tracked motion from that keyframe.
+//! Tracking ([`crate::tracker`]) runs on the caller's thread and returns at once; keyframes go to
+//! the backend ([`crate::backend`]), inline or on a worker thread ([`crate::worker`]). A scan's
+//! pose is its keyframe's graph pose composed with the tracked motion from that keyframe, so
+//! when a loop closure moves the keyframes every scan moves with them.
 
+use crate::backend::{Backend, BackendStats};
 use crate::config::SlamConfig;
-use crate::keyframe::Keyframe;
-use crate::loops::LoopCloser;
+use crate::guard::Guarded;
+use crate::tracker::{ConfigError, Tracker};
+use crate::worker::Worker;
 use plumbline_core::geom::Pose2;
-use plumbline_core::matching::local_map::{LineMap, MapCell, MapUse, MappedOdometry};
-use plumbline_core::matching::OdometryStep;
+use plumbline_core::matching::local_map::MapCell;
 use plumbline_core::scan::Scan;
 
 /// Where one scan ended up.
@@ -27,154 +26,140 @@ pub struct ScanPose {
     pub new_keyframe: bool,
     /// The match failed and the pose is a prediction.
     pub predicted: bool,
-    pub loops_accepted: usize,
 }
 
-/// Counts for the summary.
+/// Counts of the scan path for the summary.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SlamStats {
+pub struct TrackingStats {
     pub scans: usize,
     pub predicted_scans: usize,
-    pub loop_candidates: usize,
-    pub loops_accepted: usize,
-    pub loops_rejected: usize,
-    pub optimisations: usize,
-    /// Rejected loop candidates by [`Rejection`] reason.
-    pub rejections: [usize; 6],
+    /// Motion guesses that fit badly and were replaced by a wide search, or could not be.
+    pub guess_searches_used: usize,
+    pub guess_searches_failed: usize,
 }
 
-/// Cells the rolling local map needs for `config` (the caller owns them, as in the onboard code).
-pub fn local_map_cells(config: &SlamConfig) -> Vec<MapCell> {
-    let side = (config.local_map_size_m / config.local_map.cell_m)
-        .ceil()
-        .max(1.0) as usize;
-    vec![MapCell::default(); side * side]
+/// Where the backend runs.
+enum BackendRun<const N: usize> {
+    Inline(Box<Backend<N>>),
+    Threaded(Worker<N>),
 }
 
 pub struct Slam<'m, const N: usize> {
-    config: SlamConfig,
-    tracker: Box<MappedOdometry<'m, N>>,
-    keyframes: Vec<Keyframe>,
-    /// Graph poses of the keyframes (map frame).
-    poses: Vec<Pose2>,
-    loops: LoopCloser<N>,
-    stats: SlamStats,
+    tracker: Tracker<'m, N>,
+    backend: BackendRun<N>,
+    /// Tracker-frame poses of all keyframes, to place scans whose keyframe the backend has not
+    /// published yet.
+    keyframe_tracking: Vec<Pose2>,
+    stats: TrackingStats,
 }
 
-/// The local map could not be made from the configuration.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ConfigError(pub String);
+/// What a finished run leaves: the backend with its graph and keyframes, and the counts.
+pub struct Finished<const N: usize> {
+    pub backend: Backend<N>,
+    pub tracking: TrackingStats,
+}
 
 impl<'m, const N: usize> Slam<'m, N> {
-    pub fn new(config: SlamConfig, cells: &'m mut [MapCell]) -> Result<Self, ConfigError> {
-        let map = LineMap::new(cells, config.local_map)
-            .map_err(|e| ConfigError(format!("local map: {e:?}")))?;
+    /// `threaded`: run the backend on a worker thread (the online default), or inline (every
+    /// call finishes the keyframe's loop search; for tests and single-core boards).
+    pub fn new(
+        config: SlamConfig,
+        cells: &'m mut [MapCell],
+        threaded: bool,
+    ) -> Result<Self, ConfigError> {
+        let backend = if threaded {
+            BackendRun::Threaded(
+                Worker::spawn(config)
+                    .map_err(|e| ConfigError(format!("cannot start the SLAM worker: {e}")))?,
+            )
+        } else {
+            BackendRun::Inline(Box::new(Backend::new(config)))
+        };
         Ok(Self {
-            config,
-            tracker: Box::new(MappedOdometry::new(
-                config.odometry,
-                map,
-                config.refine,
-                None,
-            )),
-            keyframes: Vec::new(),
-            poses: Vec::new(),
-            loops: LoopCloser::new(config.loops),
-            stats: SlamStats::default(),
+            tracker: Tracker::new(config, cells)?,
+            backend,
+            keyframe_tracking: Vec::new(),
+            stats: TrackingStats::default(),
         })
     }
 
-    pub fn stats(&self) -> SlamStats {
+    pub fn tracking_stats(&self) -> TrackingStats {
         self.stats
-    }
-
-    pub fn keyframes(&self) -> &[Keyframe] {
-        &self.keyframes
-    }
-
-    /// Graph poses of the keyframes, in the map frame.
-    pub fn keyframe_poses(&self) -> &[Pose2] {
-        &self.poses
-    }
-
-    /// The map-frame pose of a scan anchored at `keyframe` with `relative` motion, as of now.
-    pub fn pose_of(&self, keyframe: usize, relative: Pose2) -> Pose2 {
-        self.poses[keyframe].compose(relative)
     }
 
     /// Feeds the next revolution; `prior` is the motion since the previous scan from another
     /// source (wheel odometry), if any.
     pub fn add_scan(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> ScanPose {
+        let tracked = self.tracker.track(scan, prior);
         self.stats.scans += 1;
-        let step = self.tracker.update(scan, prior);
-        let tracked = self.tracker.pose();
-        let predicted = matches!(step.step, OdometryStep::Predicted { .. });
-        self.stats.predicted_scans += predicted as usize;
-        let new_keyframe = !matches!(step.map, MapUse::NotKeyframe);
-        let mut loops_accepted = 0;
-        if new_keyframe {
-            self.add_keyframe(scan, tracked, matches!(step.map, MapUse::Skipped));
-            loops_accepted = self.close_loops();
+        self.stats.predicted_scans += tracked.predicted as usize;
+        match tracked.guess {
+            Guarded::Searched { .. } => self.stats.guess_searches_used += 1,
+            Guarded::NothingBetter => self.stats.guess_searches_failed += 1,
+            Guarded::GuessKept => {}
         }
-        let Some(anchor) = self.keyframes.len().checked_sub(1) else {
-            return ScanPose {
-                keyframe: None,
-                relative: Pose2::IDENTITY,
-                pose: tracked,
-                new_keyframe: false,
-                predicted,
-                loops_accepted: 0,
-            };
-        };
-        let relative = self.keyframes[anchor].tracking_pose.between(tracked);
-        ScanPose {
-            keyframe: Some(anchor),
-            relative,
-            pose: self.pose_of(anchor, relative),
-            new_keyframe,
-            predicted,
-            loops_accepted,
-        }
-    }
-
-    fn add_keyframe(&mut self, scan: &Scan<N>, tracked: Pose2, predicted: bool) {
-        let per_submap = self.config.keyframes_per_submap.max(1);
-        let submap = self.keyframes.len() / per_submap;
-        let (pose, path_m) = match (self.keyframes.last(), self.poses.last()) {
-            (Some(prev), Some(&prev_pose)) => {
-                let motion = prev.tracking_pose.between(tracked);
-                (
-                    prev_pose.compose(motion),
-                    prev.path_m + motion.translation().norm(),
-                )
-            }
-            _ => (tracked, 0.0),
-        };
-        self.keyframes
-            .push(Keyframe::new(scan, tracked, submap, path_m, predicted));
-        self.poses.push(pose);
-    }
-
-    /// Searches the newest keyframe against old submaps; returns how many loops were accepted.
-    fn close_loops(&mut self) -> usize {
-        let new = self.keyframes.len() - 1;
-        let candidates = self.loops.candidates(&self.keyframes, &self.poses, new);
-        let mut accepted = 0;
-        for old in candidates {
-            self.stats.loop_candidates += 1;
-            let guess = self.poses[old].between(self.poses[new]);
-            match self
-                .loops
-                .verify(&self.keyframes, &self.poses, old, new, guess)
-            {
-                Ok(_edge) => accepted += 1,
-                Err(r) => {
-                    self.stats.loops_rejected += 1;
-                    self.stats.rejections[r as usize] += 1;
+        let new_keyframe = tracked.keyframe.is_some();
+        if let Some(keyframe) = tracked.keyframe {
+            self.keyframe_tracking.push(keyframe.tracking_pose);
+            match &mut self.backend {
+                BackendRun::Inline(b) => b.add_keyframe(keyframe),
+                BackendRun::Threaded(w) => {
+                    w.send(keyframe);
                 }
             }
         }
-        self.stats.loops_accepted += accepted;
-        accepted
+        let Some(anchor) = self.keyframe_tracking.len().checked_sub(1) else {
+            return ScanPose {
+                keyframe: None,
+                relative: Pose2::IDENTITY,
+                pose: tracked.pose,
+                new_keyframe,
+                predicted: tracked.predicted,
+            };
+        };
+        let relative = self.keyframe_tracking[anchor].between(tracked.pose);
+        ScanPose {
+            keyframe: Some(anchor),
+            relative,
+            pose: self.current_pose(anchor).compose(relative),
+            new_keyframe,
+            predicted: tracked.predicted,
+        }
+    }
+
+    /// The map-frame pose of keyframe `k` as known now: the backend's, or, if it has not got
+    /// that far, the newest it has published carried forward by the tracked motion.
+    fn current_pose(&self, k: usize) -> Pose2 {
+        let worker = match &self.backend {
+            BackendRun::Inline(b) => return b.poses()[k],
+            BackendRun::Threaded(w) => w,
+        };
+        match worker.pose_or_latest(k) {
+            Some(Ok(pose)) => pose,
+            Some(Err((l, pose))) => {
+                pose.compose(self.keyframe_tracking[l].between(self.keyframe_tracking[k]))
+            }
+            None => self.keyframe_tracking[k],
+        }
+    }
+
+    /// Backend counts so far (inline: exact; threaded: as last published).
+    pub fn backend_stats(&self) -> BackendStats {
+        match &self.backend {
+            BackendRun::Inline(b) => b.stats(),
+            BackendRun::Threaded(w) => w.stats(),
+        }
+    }
+
+    /// Waits for the backend to finish every keyframe; `None` if its thread died.
+    pub fn finish(self) -> Option<Finished<N>> {
+        let backend = match self.backend {
+            BackendRun::Inline(b) => *b,
+            BackendRun::Threaded(w) => w.finish()?,
+        };
+        Some(Finished {
+            backend,
+            tracking: self.stats,
+        })
     }
 }
