@@ -46,6 +46,8 @@ pub fn run(args: SlamArgs) -> CliResult {
     let mut times_us = Vec::with_capacity(log.scans.len());
     let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
     let mut previous_odom: Option<OdomPose> = None;
+    let mut lost_s = 0.0;
+    let mut previous_stamp: Option<f64> = None;
     for (i, rec) in log.scans.iter().enumerate() {
         *scan = rec.to_scan().map_err(|_| {
             CliError(format!(
@@ -64,6 +66,11 @@ pub fn run(args: SlamArgs) -> CliResult {
         let out = slam.add_scan(&scan, prior);
         times_us.push(start.elapsed().as_secs_f64() * 1e6);
         anchors.push((out.keyframe, out.relative));
+        // Time since the last scan counts as lost when this scan could not be matched.
+        if out.predicted {
+            lost_s += previous_stamp.map_or(0.0, |p| (rec.timestamp_s - p).abs());
+        }
+        previous_stamp = Some(rec.timestamp_s);
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -97,13 +104,18 @@ pub fn run(args: SlamArgs) -> CliResult {
         "loop_closures_accepted": stats.loops_accepted,
         "loop_closures_rejected": stats.loops_rejected,
         "optimisations": stats.optimisations,
+        "keyframes_thinned": stats.thinned,
+        "beams_held": stats.beams_held,
         "loop_rejections": stats.rejections,
-        "guess_searches_used": tracking.guess_searches_used,
-        "guess_searches_failed": tracking.guess_searches_failed,
+        "relocalizations": tracking.guess_searches_used,
+        "relocalizations_failed": tracking.guess_searches_failed,
+        "predicted_scans": tracking.predicted_scans,
+        "lost_s": lost_s,
         "wall_s": wall_s,
         "realtime_factor": duration / wall_s,
         "median_scan_us": percentile(&times_us, 0.5),
         "p99_scan_us": percentile(&times_us, 0.99),
+        "peak_rss_mb": peak_rss_mb(),
     });
     print_summary(&summary, args.json);
     Ok(())
@@ -115,4 +127,12 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
     }
     let k = ((sorted.len() as f64 * p).ceil() as usize).clamp(1, sorted.len()) - 1;
     (sorted[k] * 100.0).round() / 100.0
+}
+
+/// The process's peak resident memory, MB, from Linux's `/proc/self/status` (`None` elsewhere).
+fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
 }

@@ -17,6 +17,11 @@ pub struct BackendStats {
     /// Rejected loop candidates by [`crate::loops::Rejection`] reason.
     pub rejections: [usize; 6],
     pub optimisations: usize,
+    /// Keyframes whose scan was dropped because an older keyframe at nearly the same pose
+    /// already holds it.
+    pub thinned: usize,
+    /// Beams held by all keyframes (the bulk of the back end's memory).
+    pub beams_held: usize,
 }
 
 /// An edge of the pose graph: the pose of `to` in the frame of `from`, with its information.
@@ -86,18 +91,30 @@ impl<const N: usize> Backend<N> {
             }
             _ => keyframe.tracking_pose,
         };
+        self.stats.beams_held += keyframe.beams.len();
         self.keyframes.push(keyframe);
         self.poses.push(pose);
         self.stats.keyframes += 1;
-        if self.close_loops(new) > 0 {
-            self.optimise();
+        let loops = self.close_loops(new);
+        if loops.is_empty() {
+            return;
+        }
+        self.optimise();
+        let cfg = &self.config;
+        let redundant = loops.iter().any(|m| {
+            m.translation().norm() < cfg.thin_distance_m && m.theta.abs() < cfg.thin_angle_rad
+        });
+        if redundant {
+            self.stats.beams_held -= self.keyframes[new].beams.len();
+            self.keyframes[new].drop_scan();
+            self.stats.thinned += 1;
         }
     }
 
-    /// Searches keyframe `new` against old submaps; returns how many loops were accepted.
-    fn close_loops(&mut self, new: usize) -> usize {
+    /// Searches keyframe `new` against old submaps; returns the accepted loops' measurements.
+    fn close_loops(&mut self, new: usize) -> Vec<Pose2> {
         let candidates = self.loops.candidates(&self.keyframes, &self.poses, new);
-        let mut accepted = 0;
+        let mut accepted = Vec::new();
         for old in candidates {
             self.stats.loop_candidates += 1;
             let guess = self.poses[old].between(self.poses[new]);
@@ -107,7 +124,7 @@ impl<const N: usize> Backend<N> {
             {
                 Ok(edge) => {
                     self.edges.push(loop_edge(&self.config.noise, &edge));
-                    accepted += 1;
+                    accepted.push(edge.measurement);
                 }
                 Err(r) => {
                     self.stats.loops_rejected += 1;
@@ -115,7 +132,7 @@ impl<const N: usize> Backend<N> {
                 }
             }
         }
-        self.stats.loops_accepted += accepted;
+        self.stats.loops_accepted += accepted.len();
         accepted
     }
 

@@ -17,6 +17,10 @@ pub struct SlamConfig {
     /// searched only against frozen submaps that are not the newest ones.
     pub keyframes_per_submap: usize,
     pub loops: LoopConfig,
+    /// A keyframe tied by a verified loop to an older one closer than this (m, rad) drops its
+    /// scan: it adds nothing to the map that the older one does not have.
+    pub thin_distance_m: f32,
+    pub thin_angle_rad: f32,
     pub guard: GuardConfig,
     pub noise: EdgeNoise,
 }
@@ -36,6 +40,8 @@ impl Default for SlamConfig {
             local_map_size_m: 64.0,
             keyframes_per_submap: 20,
             loops: LoopConfig::default(),
+            thin_distance_m: 0.3,
+            thin_angle_rad: 0.25,
             guard: GuardConfig::default(),
             noise: EdgeNoise::default(),
         }

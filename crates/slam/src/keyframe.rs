@@ -20,6 +20,20 @@ pub struct Keyframe {
 }
 
 impl Keyframe {
+    /// Whether the keyframe still has its scan: one that only repeats what an older keyframe
+    /// at nearly the same pose saw keeps its place in the graph but drops its beams
+    /// ([`crate::backend`]), so flying the same rooms for an hour does not grow memory.
+    pub fn has_scan(&self) -> bool {
+        !self.beams.is_empty()
+    }
+
+    /// Drops the scan, keeping the pose-graph node.
+    pub fn drop_scan(&mut self) {
+        self.beams = Vec::new();
+    }
+}
+
+impl Keyframe {
     pub fn new<const N: usize>(
         scan: &Scan<N>,
         tracking_pose: Pose2,

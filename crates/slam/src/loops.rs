@@ -75,7 +75,11 @@ impl<const N: usize> LoopCloser<N> {
             }
             let (dist, turn) = poses[j].distance_to(here);
             let reach = cfg.search_radius_m + cfg.drift_per_m * (newest.path_m - kf.path_m);
-            if dist > reach || turn > cfg.max_heading_difference_rad || kf.predicted {
+            if dist > reach
+                || turn > cfg.max_heading_difference_rad
+                || kf.predicted
+                || !kf.has_scan()
+            {
                 continue;
             }
             match best_per_submap.last_mut() {
@@ -153,7 +157,7 @@ impl<const N: usize> LoopCloser<N> {
         let first = from.saturating_sub(cfg.reference_neighbours);
         let last = (from + cfg.reference_neighbours).min(to.saturating_sub(1));
         let mut reference: Vec<Vec2> = Vec::new();
-        for k in first..=last {
+        for k in (first..=last).filter(|&k| keyframes[k].has_scan()) {
             let into_from = poses[from].between(poses[k]);
             reference.extend(keyframes[k].points().map(|p| into_from.transform(p)));
         }
