@@ -7,11 +7,11 @@
 //! [`ScanMatchDelta`] is [`scan_match_delta`].
 
 use super::autopilot::{Autopilot, AutopilotConfig};
-use super::level::Leveller;
-use super::sweep::SweepMotion;
 use crate::geom::Pose2;
 use crate::matching::{LidarOdometry, OdometryConfig, OdometryStep};
 use crate::msgs::{EstimatedState, Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
+use crate::scan::level::Leveller;
+use crate::scan::sweep::SweepMotion;
 use crate::scan::Scan;
 
 /// Lidar odometry plus autopilot, for scans of up to `N` beams.
