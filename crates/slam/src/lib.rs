@@ -7,6 +7,7 @@
 pub mod backend;
 pub mod config;
 pub mod correlative;
+pub mod grid;
 pub mod guard;
 pub mod keyframe;
 pub mod loops;
