@@ -79,6 +79,27 @@ pub fn run(args: SlamArgs) -> CliResult {
         .finish()
         .ok_or_else(|| CliError("the SLAM back end stopped unexpectedly".into()))?;
     let poses = finished.backend.poses();
+    if let Ok(path) = std::env::var("PL_DUMP_LOOPS") {
+        let kfs = finished.backend.keyframes();
+        let mut text = String::new();
+        for e in finished
+            .backend
+            .graph()
+            .edges()
+            .iter()
+            .filter(|e| e.kind == plumbline_slam::graph::EdgeKind::Loop)
+        {
+            text += &format!(
+                "{:.6} {:.6} {} {} {}\n",
+                kfs[e.from.index()].stamp_s,
+                kfs[e.to.index()].stamp_s,
+                e.measurement.x,
+                e.measurement.y,
+                e.measurement.theta
+            );
+        }
+        std::fs::write(path, text).ok();
+    }
     let trajectory: Vec<TrajectoryPoint> = log
         .scans
         .iter()
@@ -105,6 +126,7 @@ pub fn run(args: SlamArgs) -> CliResult {
         "loop_closures_rejected": stats.loops_rejected,
         "optimisations": stats.optimisations,
         "keyframes_thinned": stats.thinned,
+        "loop_closures_downweighted": stats.loops_downweighted,
         "beams_held": stats.beams_held,
         "loop_rejections": stats.rejections,
         "relocalizations": tracking.guess_searches_used,

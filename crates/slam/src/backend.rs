@@ -3,6 +3,9 @@
 //! ([`crate::worker`]) without changing what the tracker does.
 
 use crate::config::{EdgeNoise, SlamConfig};
+use crate::graph::{
+    diagonal_information, Edge, EdgeKind, Information, NodeId, OptimizeConfig, Pose2d, PoseGraph,
+};
 use crate::keyframe::Keyframe;
 use crate::loops::{LoopCloser, LoopEdge};
 use plumbline_core::geom::Pose2;
@@ -15,8 +18,10 @@ pub struct BackendStats {
     pub loops_accepted: usize,
     pub loops_rejected: usize,
     /// Rejected loop candidates by [`crate::loops::Rejection`] reason.
-    pub rejections: [usize; 6],
+    pub rejections: [usize; 7],
     pub optimisations: usize,
+    /// Accepted loops that the graph's robust kernel ignores after the last optimisation.
+    pub loops_downweighted: usize,
     /// Keyframes whose scan was dropped because an older keyframe at nearly the same pose
     /// already holds it.
     pub thinned: usize,
@@ -24,22 +29,14 @@ pub struct BackendStats {
     pub beams_held: usize,
 }
 
-/// An edge of the pose graph: the pose of `to` in the frame of `from`, with its information.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GraphEdge {
-    pub from: usize,
-    pub to: usize,
-    pub measurement: Pose2,
-    pub information: [[f64; 3]; 3],
-    pub is_loop: bool,
-}
-
 pub struct Backend<const N: usize> {
     config: SlamConfig,
     keyframes: Vec<Keyframe>,
-    /// Graph poses of the keyframes (map frame: the first keyframe's).
+    /// Node `k` is keyframe `k`; the map frame is the first keyframe's tracked pose.
+    graph: PoseGraph,
+    /// The graph's poses in the onboard type, refreshed after each optimisation.
     poses: Vec<Pose2>,
-    edges: Vec<GraphEdge>,
+    optimize: OptimizeConfig,
     loops: LoopCloser<N>,
     stats: BackendStats,
 }
@@ -49,8 +46,9 @@ impl<const N: usize> Backend<N> {
         Self {
             config,
             keyframes: Vec::new(),
+            graph: PoseGraph::new(),
             poses: Vec::new(),
-            edges: Vec::new(),
+            optimize: OptimizeConfig::default(),
             loops: LoopCloser::new(config.loops),
             stats: BackendStats::default(),
         }
@@ -69,28 +67,35 @@ impl<const N: usize> Backend<N> {
         &self.poses
     }
 
-    pub fn edges(&self) -> &[GraphEdge] {
-        &self.edges
+    /// The pose graph (node `k` is keyframe `k`).
+    pub fn graph(&self) -> &PoseGraph {
+        &self.graph
     }
 
     /// Adds the next keyframe (tied to the previous one by the tracked motion), searches it
     /// against old submaps, and optimises if a loop was accepted.
     pub fn add_keyframe(&mut self, keyframe: Keyframe) {
         let new = self.keyframes.len();
-        let pose = match (self.keyframes.last(), self.poses.last()) {
-            (Some(prev), Some(&prev_pose)) => {
+        let previous = self.keyframes.last().zip(self.poses.last());
+        let (pose, motion) = match previous {
+            Some((prev, &prev_pose)) => {
                 let motion = prev.tracking_pose.between(keyframe.tracking_pose);
-                self.edges.push(GraphEdge {
-                    from: new - 1,
-                    to: new,
-                    measurement: motion,
-                    information: odometry_information(&self.config.noise, motion, &keyframe),
-                    is_loop: false,
-                });
-                prev_pose.compose(motion)
+                (prev_pose.compose(motion), Some(motion))
             }
-            _ => keyframe.tracking_pose,
+            None => (keyframe.tracking_pose, None),
         };
+        // Poses come from the tracker and are finite, and the information is a positive
+        // diagonal, so the graph cannot refuse them; the node index equals the keyframe's.
+        let _ = self.graph.add_node(to_graph(pose));
+        if let Some(motion) = motion {
+            let _ = self.graph.add_edge(Edge {
+                from: node(new - 1),
+                to: node(new),
+                measurement: to_graph(motion),
+                information: odometry_information(&self.config.noise, motion, &keyframe),
+                kind: EdgeKind::Odometry,
+            });
+        }
         self.stats.beams_held += keyframe.beams.len();
         self.keyframes.push(keyframe);
         self.poses.push(pose);
@@ -123,8 +128,13 @@ impl<const N: usize> Backend<N> {
                 .verify(&self.keyframes, &self.poses, old, new, guess)
             {
                 Ok(edge) => {
-                    self.edges.push(loop_edge(&self.config.noise, &edge));
-                    accepted.push(edge.measurement);
+                    if self
+                        .graph
+                        .add_edge(loop_edge(&self.config.noise, &edge))
+                        .is_ok()
+                    {
+                        accepted.push(edge.measurement);
+                    }
                 }
                 Err(r) => {
                     self.stats.loops_rejected += 1;
@@ -136,32 +146,42 @@ impl<const N: usize> Backend<N> {
         accepted
     }
 
+    /// Optimises the graph (warm-started from the current poses) and refreshes the poses; loop
+    /// edges the robust kernel ends up ignoring are counted as rejected by the graph.
     fn optimise(&mut self) {
+        let report = self.graph.optimize(&self.optimize);
         self.stats.optimisations += 1;
+        self.stats.loops_downweighted = report.downweighted_loops.len();
+        for (pose, node) in self.poses.iter_mut().zip(self.graph.nodes()) {
+            *pose = Pose2::new(node.x as f32, node.y as f32, node.theta as f32);
+        }
     }
 }
 
 /// Information of a tracked motion: a floor plus a share of the distance and the turn. A
 /// keyframe from a failed match is a prediction: it gets a hundredth of the information.
-fn odometry_information(noise: &EdgeNoise, motion: Pose2, keyframe: &Keyframe) -> [[f64; 3]; 3] {
+fn odometry_information(noise: &EdgeNoise, motion: Pose2, keyframe: &Keyframe) -> Information {
     let sigma_m = noise.odometry_m + noise.odometry_per_m * motion.translation().norm();
     let sigma_rad = noise.odometry_rad + noise.odometry_per_rad * motion.theta.abs();
-    let scale = if keyframe.predicted { 0.01 } else { 1.0 };
-    diagonal(sigma_m, sigma_rad, scale)
+    // A prediction is a guess: ten times the spread, a hundredth of the information.
+    let spread = if keyframe.predicted { 10.0 } else { 1.0 };
+    diagonal_information(sigma_m as f64 * spread, sigma_rad as f64 * spread)
 }
 
-fn loop_edge(noise: &EdgeNoise, edge: &LoopEdge) -> GraphEdge {
-    GraphEdge {
-        from: edge.from,
-        to: edge.to,
-        measurement: edge.measurement,
-        information: diagonal(noise.loop_m, noise.loop_rad, 1.0),
-        is_loop: true,
+fn loop_edge(noise: &EdgeNoise, edge: &LoopEdge) -> Edge {
+    Edge {
+        from: node(edge.from),
+        to: node(edge.to),
+        measurement: to_graph(edge.measurement),
+        information: diagonal_information(noise.loop_m as f64, noise.loop_rad as f64),
+        kind: EdgeKind::Loop,
     }
 }
 
-fn diagonal(sigma_m: f32, sigma_rad: f32, scale: f64) -> [[f64; 3]; 3] {
-    let im = scale / (sigma_m as f64 * sigma_m as f64);
-    let ir = scale / (sigma_rad as f64 * sigma_rad as f64);
-    [[im, 0.0, 0.0], [0.0, im, 0.0], [0.0, 0.0, ir]]
+fn node(index: usize) -> NodeId {
+    NodeId(index as u32)
+}
+
+fn to_graph(p: Pose2) -> Pose2d {
+    Pose2d::new(p.x as f64, p.y as f64, p.theta as f64)
 }

@@ -82,6 +82,9 @@ pub struct LoopConfig {
     pub min_inlier_ratio: f32,
     /// …with an RMS point-to-line residual at most this, m…
     pub max_rms_m: f32,
+    /// …constrain both directions of translation at least this evenly (least over most
+    /// information; the matcher reports a corridor's axis below its own, smaller ratio)…
+    pub min_conditioning: f32,
     /// …and move the coarse search's answer at most this far, m and rad (further means the
     /// matcher slid into another basin).
     pub max_correction_m: f32,
@@ -100,6 +103,7 @@ impl Default for LoopConfig {
             min_submap_gap: 2,
             min_inlier_ratio: 0.7,
             max_rms_m: 0.05,
+            min_conditioning: 0.1,
             max_correction_m: 0.2,
             max_correction_rad: 0.1,
             reference_neighbours: 2,

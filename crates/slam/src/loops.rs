@@ -37,6 +37,8 @@ pub enum Rejection {
     FewInliers,
     LargeResidual,
     TooFarFromGuess,
+    /// The scans constrain one direction too weakly (a corridor).
+    Degenerate,
 }
 
 pub struct LoopCloser<const N: usize> {
@@ -129,6 +131,11 @@ impl<const N: usize> LoopCloser<N> {
         }
         if q.rms_residual_m > cfg.max_rms_m {
             return Err(Rejection::LargeResidual);
+        }
+        // Along a corridor the scans do not fix the position: such a match would pin the
+        // loop to wherever the search happened to stop.
+        if q.degenerate_direction.is_some() || q.conditioning < cfg.min_conditioning {
+            return Err(Rejection::Degenerate);
         }
         let (shift, turn) = coarse.pose.distance_to(result.motion);
         if shift > cfg.max_correction_m || turn > cfg.max_correction_rad {
