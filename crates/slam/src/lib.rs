@@ -3,3 +3,4 @@
 //! submaps and checked before they enter a pose graph, and an occupancy grid of the whole area
 //! for people and planners. It runs scan by scan online and the same way over a recorded log.
 #![forbid(unsafe_code)]
+pub mod graph;
