@@ -4,6 +4,7 @@
 
 mod edge;
 mod g2o;
+mod graduation;
 mod kernel;
 mod optimize;
 mod pattern;

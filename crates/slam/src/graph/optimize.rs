@@ -12,6 +12,7 @@
 //! usually needs only a few iterations; a graph already at its optimum stops after one solve.
 
 use super::edge::{EdgeId, EdgeKind, NodeId};
+use super::graduation::{edge_kernels, stage_kernels};
 use super::kernel::LoopKernel;
 use super::pattern::Pattern;
 use super::pose::Pose2d;
@@ -22,6 +23,9 @@ use faer::sparse::linalg::solvers::Llt;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{MatMut, Side};
 use std::time::{Duration, Instant};
+
+/// Initial Marquardt damping: small, because a warm-started graph is near its optimum.
+const INITIAL_LAMBDA: f64 = 1e-5;
 
 /// Optimiser settings; the defaults suit graphs of keyframes a few decimetres apart.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,8 +38,10 @@ pub struct OptimizeConfig {
     pub loop_kernel: LoopKernel,
     /// A loop edge whose final weight is below this is reported as down-weighted (rejected).
     pub downweighted_below: f64,
-    /// Initial Marquardt damping: small, because a warm-started graph is near its optimum.
-    pub initial_lambda: f64,
+    /// Graduated non-convexity: the kernel threshold starts above every loop's error and is
+    /// divided by this factor each stage down to the kernel's own (see `super::graduation`).
+    /// None runs the kernel as it is from the start.
+    pub graduation_step: Option<f64>,
 }
 
 impl Default for OptimizeConfig {
@@ -45,7 +51,7 @@ impl Default for OptimizeConfig {
             relative_tolerance: 1e-6,
             loop_kernel: LoopKernel::Dcs { phi: 5.0 },
             downweighted_below: 0.1,
-            initial_lambda: 1e-5,
+            graduation_step: Some(2.0),
         }
     }
 }
@@ -87,7 +93,8 @@ impl PoseGraph {
     /// Moves the free nodes to minimise the (robust) squared error of all edges.
     pub fn optimize(&mut self, config: &OptimizeConfig) -> OptimizeReport {
         let start = Instant::now();
-        let initial_chi2 = total_cost(self, self.nodes(), config.loop_kernel);
+        let final_kernels = edge_kernels(self, config.loop_kernel, config.loop_kernel);
+        let initial_chi2 = total_cost(self, self.nodes(), &final_kernels);
         let mut report = OptimizeReport {
             iterations: 0,
             initial_chi2,
@@ -107,20 +114,35 @@ impl PoseGraph {
         }
         if let Some(pattern) = self.pattern.take() {
             report.anchored = pattern.anchored.clone();
-            report.stop = self.levenberg_marquardt(&pattern, config, &mut report);
+            let stages = stage_kernels(self, config);
+            for (k, &stage) in stages.iter().enumerate() {
+                let last = k + 1 == stages.len();
+                let kernels = edge_kernels(self, stage, config.loop_kernel);
+                // Intermediate stages only need to move the poses towards the next stage's
+                // basin, not to converge: a loose tolerance and a few steps suffice.
+                let (tolerance, budget) = if last {
+                    (config.relative_tolerance, config.max_iterations)
+                } else {
+                    (1e-3, 5)
+                };
+                let lm = self.levenberg_marquardt(&pattern, &kernels, tolerance, budget);
+                report.iterations += lm.1;
+                report.stop = lm.0;
+            }
             self.pattern = Some(pattern);
         }
         report.converged = matches!(
             report.stop,
             StopReason::Converged | StopReason::NothingToOptimize
         );
-        report.final_chi2 = total_cost(self, self.nodes(), config.loop_kernel);
-        report.edge_weights = self.edge_weights(config.loop_kernel);
+        report.final_chi2 = total_cost(self, self.nodes(), &final_kernels);
+        report.edge_weights = self.edge_weights(&final_kernels);
         report.downweighted_loops = (self.edges().iter().zip(&report.edge_weights))
             .enumerate()
             .filter(|(_, (e, &w))| e.kind == EdgeKind::Loop && w < config.downweighted_below)
             .map(|(i, _)| EdgeId(i as u32))
             .collect();
+        self.remember_rejected(&report.downweighted_loops);
         report.elapsed = start.elapsed();
         report
     }
@@ -128,27 +150,29 @@ impl PoseGraph {
     fn levenberg_marquardt(
         &mut self,
         pattern: &Pattern,
-        config: &OptimizeConfig,
-        report: &mut OptimizeReport,
-    ) -> StopReason {
+        kernels: &[LoopKernel],
+        tolerance: f64,
+        max_iterations: usize,
+    ) -> (StopReason, usize) {
+        let mut iterations = 0;
         let n = 3 * pattern.vars;
         let mut hessian = vec![0.0; pattern.row_idx.len()];
         let mut damped = vec![0.0; hessian.len()];
         let mut gradient = vec![0.0; n];
         let mut step = vec![0.0; n];
         let mut trial: Vec<Pose2d> = self.nodes().to_vec();
-        let mut cost = report.initial_chi2;
-        let (mut lambda, mut nu) = (config.initial_lambda, 2.0);
+        let mut cost = total_cost(self, self.nodes(), kernels);
+        let (mut lambda, mut nu) = (INITIAL_LAMBDA, 2.0);
         let symbolic =
             SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &pattern.row_idx);
-        for _ in 0..config.max_iterations {
+        for _ in 0..max_iterations {
             if cost <= f64::MIN_POSITIVE {
-                return StopReason::Converged;
+                return (StopReason::Converged, iterations);
             }
-            self.assemble(pattern, config.loop_kernel, &mut hessian, &mut gradient);
+            self.assemble(pattern, kernels, &mut hessian, &mut gradient);
             loop {
                 if lambda > 1e16 {
-                    return StopReason::NoDescent;
+                    return (StopReason::NoDescent, iterations);
                 }
                 damped.copy_from_slice(&hessian);
                 for diag in &pattern.diagonal {
@@ -180,8 +204,8 @@ impl PoseGraph {
                     continue;
                 }
                 // A step promising (almost) nothing means the gradient is (almost) zero.
-                if predicted <= 1e-3 * config.relative_tolerance * cost {
-                    return StopReason::Converged;
+                if predicted <= 1e-3 * tolerance * cost {
+                    return (StopReason::Converged, iterations);
                 }
                 trial.copy_from_slice(self.nodes());
                 for (v, &node) in pattern.node_of_var.iter().enumerate() {
@@ -189,47 +213,44 @@ impl PoseGraph {
                     let h = &step[3 * v..3 * v + 3];
                     trial[node] = Pose2d::new(p.x + h[0], p.y + h[1], p.theta + h[2]);
                 }
-                let new_cost = total_cost(self, &trial, config.loop_kernel);
+                let new_cost = total_cost(self, &trial, kernels);
                 let gain = (cost - new_cost) / predicted;
                 if gain > 0.0 && new_cost.is_finite() {
                     self.poses_mut().copy_from_slice(&trial);
-                    report.iterations += 1;
+                    iterations += 1;
                     lambda *= (1.0 - (2.0 * gain - 1.0).powi(3)).max(1.0 / 3.0);
                     nu = 2.0;
                     let decrease = cost - new_cost;
                     cost = new_cost;
-                    if decrease <= config.relative_tolerance * (cost + decrease) {
-                        return StopReason::Converged;
+                    if decrease <= tolerance * (cost + decrease) {
+                        return (StopReason::Converged, iterations);
                     }
                     break;
                 }
                 (lambda, nu) = (lambda * nu, nu * 2.0);
             }
         }
-        StopReason::MaxIterations
+        (StopReason::MaxIterations, iterations)
     }
 
     /// Writes `H = sum J^T W J` (upper triangle) and `g = sum J^T W e` at the current poses.
     fn assemble(
         &self,
         pattern: &Pattern,
-        kernel: LoopKernel,
+        kernels: &[LoopKernel],
         hessian: &mut [f64],
         gradient: &mut [f64],
     ) {
         hessian.fill(0.0);
         gradient.fill(0.0);
         let poses = self.nodes();
-        for (edge, slots) in self.edges().iter().zip(&pattern.edges) {
+        for ((edge, slots), kernel) in self.edges().iter().zip(&pattern.edges).zip(kernels) {
             let lin = linearize(
                 poses[edge.from.index()],
                 poses[edge.to.index()],
                 edge.measurement,
             );
-            let w = match edge.kind {
-                EdgeKind::Loop => kernel.weight(chi2(&lin.error, &edge.information)),
-                EdgeKind::Odometry => 1.0,
-            };
+            let w = kernel.weight(chi2(&lin.error, &edge.information));
             let omega = edge.information.map(|row| row.map(|v| v * w));
             let a_omega = transpose_mul(&lin.d_from, &omega);
             let b_omega = transpose_mul(&lin.d_to, &omega);
@@ -266,33 +287,23 @@ impl PoseGraph {
     }
 
     /// Every edge's kernel weight at the current poses.
-    fn edge_weights(&self, kernel: LoopKernel) -> Vec<f64> {
+    fn edge_weights(&self, kernels: &[LoopKernel]) -> Vec<f64> {
         let poses = self.nodes();
-        self.edges()
-            .iter()
-            .map(|e| match e.kind {
-                EdgeKind::Odometry => 1.0,
-                EdgeKind::Loop => {
-                    let lin = linearize(poses[e.from.index()], poses[e.to.index()], e.measurement);
-                    kernel.weight(chi2(&lin.error, &e.information))
-                }
+        (self.edges().iter().zip(kernels))
+            .map(|(e, kernel)| {
+                let lin = linearize(poses[e.from.index()], poses[e.to.index()], e.measurement);
+                kernel.weight(chi2(&lin.error, &e.information))
             })
             .collect()
     }
 }
 
-/// The objective: sum of `e^T Omega e` over odometry edges and the kernel's cost over loops.
-fn total_cost(graph: &PoseGraph, poses: &[Pose2d], kernel: LoopKernel) -> f64 {
-    graph
-        .edges()
-        .iter()
-        .map(|e| {
+/// The objective: each edge's kernel cost of `e^T Omega e` (plain for odometry), summed.
+pub(super) fn total_cost(graph: &PoseGraph, poses: &[Pose2d], kernels: &[LoopKernel]) -> f64 {
+    (graph.edges().iter().zip(kernels))
+        .map(|(e, kernel)| {
             let lin = linearize(poses[e.from.index()], poses[e.to.index()], e.measurement);
-            let c = chi2(&lin.error, &e.information);
-            match e.kind {
-                EdgeKind::Loop => kernel.cost(c),
-                EdgeKind::Odometry => c,
-            }
+            kernel.cost(chi2(&lin.error, &e.information))
         })
         .sum()
 }

@@ -19,6 +19,9 @@ pub struct PoseGraph {
     /// The normal equations' sparsity pattern and its symbolic factorisation, kept while no
     /// node, edge or fixed flag has been added, so repeated optimisations skip that work.
     pub(super) pattern: Option<Pattern>,
+    /// Loop edges the last optimisation down-weighted, indexed like `edges`; they skip the
+    /// graduated start of the next one (see `super::graduation`).
+    rejected: Vec<bool>,
 }
 
 impl PoseGraph {
@@ -53,6 +56,7 @@ impl PoseGraph {
         check_information(&edge.information)?;
         let id = u32::try_from(self.edges.len()).map_err(|_| GraphError::TooLarge)?;
         let m = edge.measurement;
+        self.rejected.push(false);
         self.edges.push(Edge {
             measurement: Pose2d::new(m.x, m.y, m.theta),
             ..edge
@@ -101,6 +105,17 @@ impl PoseGraph {
 
     pub(super) fn fixed_flags(&self) -> &[bool] {
         &self.fixed
+    }
+
+    pub(super) fn was_rejected(&self, edge: usize) -> bool {
+        self.rejected.get(edge).copied().unwrap_or(false)
+    }
+
+    pub(super) fn remember_rejected(&mut self, rejected: &[EdgeId]) {
+        self.rejected.fill(false);
+        for id in rejected {
+            self.rejected[id.index()] = true;
+        }
     }
 
     pub(super) fn poses_mut(&mut self) -> &mut [Pose2d] {
