@@ -37,6 +37,11 @@ pub struct Backend<const N: usize> {
     /// The graph's poses in the onboard type, refreshed after each optimisation.
     poses: Vec<Pose2>,
     optimize: OptimizeConfig,
+    /// Loops accepted since the last optimisation, and keyframes added since.
+    pending_loops: usize,
+    since_optimised: usize,
+    /// (keyframe, submap) of loops accepted lately.
+    recent_loops: Vec<(usize, usize)>,
     loops: LoopCloser<N>,
     stats: BackendStats,
 }
@@ -49,6 +54,9 @@ impl<const N: usize> Backend<N> {
             graph: PoseGraph::new(),
             poses: Vec::new(),
             optimize: OptimizeConfig::default(),
+            pending_loops: 0,
+            since_optimised: 0,
+            recent_loops: Vec::new(),
             loops: LoopCloser::new(config.loops),
             stats: BackendStats::default(),
         }
@@ -101,10 +109,11 @@ impl<const N: usize> Backend<N> {
         self.poses.push(pose);
         self.stats.keyframes += 1;
         let loops = self.close_loops(new);
-        if loops.is_empty() {
-            return;
+        self.pending_loops += loops.len();
+        self.since_optimised += 1;
+        if self.pending_loops > 0 && self.since_optimised >= self.config.optimise_every_keyframes {
+            self.optimise();
         }
-        self.optimise();
         let cfg = &self.config;
         let redundant = loops.iter().any(|m| {
             m.translation().norm() < cfg.thin_distance_m && m.theta.abs() < cfg.thin_angle_rad
@@ -116,9 +125,26 @@ impl<const N: usize> Backend<N> {
         }
     }
 
+    /// Optimises what is still pending: call when the log or the flight ends.
+    pub fn finish(&mut self) {
+        if self.pending_loops > 0 {
+            self.optimise();
+        }
+    }
+
     /// Searches keyframe `new` against old submaps; returns the accepted loops' measurements.
     fn close_loops(&mut self, new: usize) -> Vec<Pose2> {
-        let candidates = self.loops.candidates(&self.keyframes, &self.poses, new);
+        // A submap tied to the vehicle by a loop a few keyframes ago is already in the graph:
+        // searching it again would mostly add the same constraint.
+        let recent = self.config.loops.skip_connected_keyframes;
+        let connected: Vec<usize> = self
+            .recent_loops
+            .iter()
+            .filter(|(k, _)| k + recent >= new)
+            .map(|&(_, submap)| submap)
+            .collect();
+        let mut candidates = self.loops.candidates(&self.keyframes, &self.poses, new);
+        candidates.retain(|&j| !connected.contains(&self.keyframes[j].submap));
         let mut accepted = Vec::new();
         for old in candidates {
             self.stats.loop_candidates += 1;
@@ -149,6 +175,11 @@ impl<const N: usize> Backend<N> {
     /// Optimises the graph (warm-started from the current poses) and refreshes the poses; loop
     /// edges the robust kernel ends up ignoring are counted as rejected by the graph.
     fn optimise(&mut self) {
+        self.pending_loops = 0;
+        self.since_optimised = 0;
+        self.recent_loops.retain(|(k, _)| {
+            k + self.config.loops.skip_connected_keyframes >= self.keyframes.len()
+        });
         let report = self.graph.optimize(&self.optimize);
         self.stats.optimisations += 1;
         self.stats.loops_downweighted = report.downweighted_loops.len();

@@ -21,6 +21,10 @@ pub struct SlamConfig {
     /// scan: it adds nothing to the map that the older one does not have.
     pub thin_distance_m: f32,
     pub thin_angle_rad: f32,
+    /// Accepted loops wait for this many keyframes before the graph is optimised (bounded
+    /// work: one optimisation of the whole graph costs milliseconds); the end of a run
+    /// optimises what is left.
+    pub optimise_every_keyframes: usize,
     pub guard: GuardConfig,
     pub noise: EdgeNoise,
 }
@@ -42,6 +46,7 @@ impl Default for SlamConfig {
             loops: LoopConfig::default(),
             thin_distance_m: 0.3,
             thin_angle_rad: 0.25,
+            optimise_every_keyframes: 10,
             guard: GuardConfig::default(),
             noise: EdgeNoise::default(),
         }
@@ -64,6 +69,8 @@ pub struct LoopConfig {
     /// Submaps younger than this (counting the current one) are not searched: the local map
     /// already ties the keyframe to them.
     pub min_submap_gap: usize,
+    /// A submap tied to the vehicle by a loop within this many keyframes is not searched again.
+    pub skip_connected_keyframes: usize,
     /// The candidate's neighbours on each side that join it in the reference of the coarse
     /// search (a 180° scan alone may see too little of a place seen from elsewhere).
     pub reference_neighbours: usize,
@@ -101,7 +108,8 @@ impl Default for LoopConfig {
             max_heading_difference_rad: 1.0,
             max_candidates: 2,
             min_submap_gap: 2,
-            min_inlier_ratio: 0.7,
+            skip_connected_keyframes: 3,
+            min_inlier_ratio: 0.5,
             max_rms_m: 0.05,
             min_conditioning: 0.1,
             max_correction_m: 0.2,

@@ -154,7 +154,10 @@ impl<'m, const N: usize> Slam<'m, N> {
     /// Waits for the backend to finish every keyframe; `None` if its thread died.
     pub fn finish(self) -> Option<Finished<N>> {
         let backend = match self.backend {
-            BackendRun::Inline(b) => *b,
+            BackendRun::Inline(mut b) => {
+                b.finish();
+                *b
+            }
             BackendRun::Threaded(w) => w.finish()?,
         };
         Some(Finished {

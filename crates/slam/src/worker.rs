@@ -44,6 +44,7 @@ impl<const N: usize> Worker<N> {
                         p.stats = backend.stats();
                     }
                 }
+                backend.finish();
                 backend
             })?;
         Ok(Self {
