@@ -146,8 +146,8 @@ fn scans_beyond_the_bounds_are_refused_whole_and_change_nothing() {
     let e = g
         .insert_scan(
             wide,
-            &room_scan(Pose2::new(1.0, 1.0, 0.0), 4.0, 3.0, 360),
-            10.0,
+            &room_scan(Pose2::new(1.0, 1.0, 0.0), 12.0, 3.0, 360),
+            15.0,
         )
         .unwrap_err();
     assert!(matches!(e, GridError::TooManyCells { .. }), "{e}");

@@ -2,7 +2,6 @@
 
 use super::frame::{Cell, CellRect, GridFrame};
 use super::prepared::PreparedScan;
-use super::raycast::trace;
 use super::tiles::{cell_at, Tiles, TILE};
 use super::{CellState, GridConfig, GridError};
 use plumbline_core::geom::{Pose2, Vec2};
@@ -106,13 +105,14 @@ impl OccupancyGrid {
             rect.include(cell);
             self.ends.push(cell);
         }
+        let scan_rect = rect;
         let rect = self.bounds.map_or(rect, |b| b.union(rect));
-        self.check_room(rect, farthest)?;
+        self.check_room(rect, scan_rect, farthest)?;
         self.tiles.cover(rect);
         let tiles = &mut self.tiles;
         let hits = scan.hits().len();
         for (k, &end) in self.ends.iter().enumerate() {
-            trace(origin, end, |cell| tiles.add_miss(cell));
+            tiles.add_misses_along(origin, end);
             if k < hits {
                 tiles.add_hit(end);
             } else {
@@ -124,14 +124,19 @@ impl OccupancyGrid {
         Ok(())
     }
 
-    /// Refuses a scan that would widen the map past the extent, or might need more tiles than
-    /// the budget allows (counted over the new bounds' unallocated tiles: an upper bound, so
-    /// the refusal can come before any change).
-    fn check_room(&self, rect: CellRect, farthest_m: f32) -> Result<(), GridError> {
+    /// Refuses a scan that would widen the map (to `rect`) past the extent, or might need more
+    /// tiles than the budget allows (counted over the unallocated tiles of the scan's own
+    /// rectangle: an upper bound, so the refusal can come before any change).
+    fn check_room(
+        &self,
+        rect: CellRect,
+        scan_rect: CellRect,
+        farthest_m: f32,
+    ) -> Result<(), GridError> {
         let r = self.config.resolution_m;
         let span_m = [rect.width() as f32 * r, rect.height() as f32 * r];
         let max = self.config.max_extent_m;
-        if !(farthest_m <= max) || span_m[0] > max || span_m[1] > max {
+        if farthest_m.is_nan() || farthest_m > max || span_m[0] > max || span_m[1] > max {
             return Err(GridError::TooWide {
                 span_m,
                 farthest_m,
@@ -139,8 +144,9 @@ impl OccupancyGrid {
             });
         }
         let max_tiles = self.config.max_cells.div_ceil(TILE * TILE);
-        if self.tiles.allocated() + self.tiles.missing_in(rect) > max_tiles {
-            let needed = (self.tiles.allocated() + self.tiles.missing_in(rect)) * TILE * TILE;
+        let tiles = self.tiles.allocated() + self.tiles.missing_in(scan_rect);
+        if tiles > max_tiles {
+            let needed = tiles * TILE * TILE;
             return Err(GridError::TooManyCells {
                 needed,
                 max_cells: self.config.max_cells,
