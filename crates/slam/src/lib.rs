@@ -5,3 +5,4 @@
 #![forbid(unsafe_code)]
 
 pub mod grid;
+pub mod map_files;

@@ -2,28 +2,10 @@
 
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::scan::Beam;
-use plumbline_slam::grid::{CellState, GridConfig, GridError, OccupancyGrid, PreparedScan, Raster};
+mod common;
 
-/// Beams from `pose` to the walls of the axis-aligned room [0, w] x [0, h] (exact ranges).
-fn room_scan(pose: Pose2, w: f32, h: f32, beams: usize) -> Vec<Beam> {
-    (0..beams)
-        .map(|k| {
-            let a = k as f32 * core::f32::consts::TAU / beams as f32 - core::f32::consts::PI;
-            let (dx, dy) = ((pose.theta + a).cos(), (pose.theta + a).sin());
-            let tx = if dx > 0.0 {
-                (w - pose.x) / dx
-            } else {
-                -pose.x / dx
-            };
-            let ty = if dy > 0.0 {
-                (h - pose.y) / dy
-            } else {
-                -pose.y / dy
-            };
-            Beam::new(a, tx.min(ty))
-        })
-        .collect()
-}
+use common::room_scan;
+use plumbline_slam::grid::{CellState, GridConfig, GridError, OccupancyGrid, PreparedScan, Raster};
 
 fn grid() -> OccupancyGrid {
     OccupancyGrid::new(GridConfig::default()).unwrap()
