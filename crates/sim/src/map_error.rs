@@ -56,7 +56,10 @@ pub fn map_error(
     }
     let n = distances.len();
     let mean_m = distances.iter().sum::<f64>() / n as f64;
-    let far = distances.iter().filter(|&&d| d > 2.0 * resolution_m).count();
+    let far = distances
+        .iter()
+        .filter(|&&d| d > 2.0 * resolution_m)
+        .count();
     distances.sort_unstable_by(f64::total_cmp);
     Some(MapError {
         occupied_cells: n,
@@ -120,13 +123,7 @@ mod tests {
         assert_eq!(near.far_fraction, 0.0, "0.08 m is within two 5 cm cells");
         // The same cells scored with a map pose 0.2 m off along y: the cells on the y = 0
         // wall move 0.2 m away from it, those on the x = 4 wall slide along it.
-        let wrong = map_error(
-            wall_points_in_map(start, 0.0),
-            0.05,
-            &w,
-            [1.0, 1.2, 0.7],
-        )
-        .unwrap();
+        let wrong = map_error(wall_points_in_map(start, 0.0), 0.05, &w, [1.0, 1.2, 0.7]).unwrap();
         assert!((wrong.mean_m - 0.2 * 30.0 / 50.0).abs() < 1e-9, "{wrong:?}");
         assert_eq!(map_error(Vec::new(), 0.05, &w, start), None);
     }
@@ -135,6 +132,9 @@ mod tests {
     fn cells_far_from_every_wall_are_measured_exactly() {
         let w = World::parse("start 1 1 0\noutline 0 0 40 0 40 30 0 30\n").unwrap();
         let e = map_error([[20.0, 15.0]], 0.05, &w, [0.0; 3]).unwrap();
-        assert!((e.mean_m - 15.0).abs() < 1e-9 && e.p95_m == e.mean_m, "{e:?}");
+        assert!(
+            (e.mean_m - 15.0).abs() < 1e-9 && e.p95_m == e.mean_m,
+            "{e:?}"
+        );
     }
 }

@@ -69,10 +69,11 @@ fn interpolate(a: &TruthPose, b: &TruthPose, t_s: f64) -> [f64; 3] {
 /// whole revolution is placed at the pose of its first beam.
 fn true_pose_grid(
     scans: &[(LidarScan, TruthPose)],
+    config: GridConfig,
     deskew: bool,
     nudge: impl Fn(usize) -> [f64; 2],
 ) -> OccupancyGrid {
-    let mut grid = OccupancyGrid::new(GridConfig::default()).unwrap();
+    let mut grid = OccupancyGrid::new(config).unwrap();
     let origin = planar(&scans[0].1);
     for (k, (scan, truth)) in scans.iter().enumerate() {
         let at = planar(truth);
@@ -86,7 +87,8 @@ fn true_pose_grid(
                 let mut p = PreparedScan::new();
                 for (b, (&r, &ok)) in scan.ranges_m.iter().zip(&scan.valid).enumerate() {
                     if ok {
-                        let beam_pose = interpolate(truth, next, scan.stamp_s + b as f64 * scan.beam_dt_s);
+                        let beam_pose =
+                            interpolate(truth, next, scan.stamp_s + b as f64 * scan.beam_dt_s);
                         let (s, c) = angle(b).sin_cos();
                         let world = apply(beam_pose, [f64::from(r) * c, f64::from(r) * s]);
                         let q = between(at, [world[0], world[1], 0.0]);
@@ -101,7 +103,10 @@ fn true_pose_grid(
                     .iter()
                     .zip(&scan.valid)
                     .enumerate()
-                    .map(|(b, (&r, &ok))| Beam { valid: ok, ..Beam::new(angle(b) as f32, r) })
+                    .map(|(b, (&r, &ok))| Beam {
+                        valid: ok,
+                        ..Beam::new(angle(b) as f32, r)
+                    })
                     .collect();
                 PreparedScan::from_beams(&beams, scan.max_range_m as f32, None).unwrap()
             }
@@ -119,12 +124,21 @@ fn score(world: &World, scans: &[(LidarScan, TruthPose)], grid: &OccupancyGrid) 
     grid_map_error(grid, world, planar(&scans[0].1)).unwrap()
 }
 
-/// The floor for one world and lidar: printed, and the de-skewed one held to the SLAM target.
+/// The floor for one world and lidar, with the world's walking people as `plumbline sim`
+/// flies them: printed, and the de-skewed one held to the SLAM target.
 fn floor(world: &str, lidar: LidarProfile, target_m: f64) {
     let name = lidar.name;
     let (w, scans) = survey(world, lidar);
-    let skewed = score(&w, &scans, &true_pose_grid(&scans, false, no_nudge));
-    let deskewed = score(&w, &scans, &true_pose_grid(&scans, true, no_nudge));
+    let skewed = score(
+        &w,
+        &scans,
+        &true_pose_grid(&scans, GridConfig::default(), false, no_nudge),
+    );
+    let deskewed = score(
+        &w,
+        &scans,
+        &true_pose_grid(&scans, GridConfig::default(), true, no_nudge),
+    );
     for (how, e) in [("scan pose", skewed), ("de-skewed", deskewed)] {
         println!(
             "map error floor {world} {name} {how}: mean {:.4} m, p95 {:.4} m, {:.2} % beyond two \
@@ -137,7 +151,10 @@ fn floor(world: &str, lidar: LidarProfile, target_m: f64) {
         );
     }
     assert!(deskewed.mean_m <= target_m, "{world} {name}: {deskewed:?}");
-    assert!(deskewed.occupied_cells > 1000, "{world} {name}: {deskewed:?}");
+    assert!(
+        deskewed.occupied_cells > 1000,
+        "{world} {name}: {deskewed:?}"
+    );
 }
 
 #[test]
@@ -175,11 +192,29 @@ fn floor_building_utm30lx() {
 #[test]
 fn pose_errors_raise_the_map_error() {
     let (w, scans) = survey("office", LidarProfile::utm30lx());
-    let grid = true_pose_grid(&scans, true, no_nudge);
+    let grid = true_pose_grid(&scans, GridConfig::default(), true, no_nudge);
     let truth = score(&w, &scans, &grid);
     let start = planar(&scans[0].1);
     let shifted = grid_map_error(&grid, &w, [start[0] + 0.2, start[1], start[2]]).unwrap();
     println!("true {truth:?}\nshifted 0.2 m {shifted:?}");
-    let split = score(&w, &scans, &true_pose_grid(&scans, true, |k| [0.0, if k % 2 == 0 { 0.15 } else { 0.0 }]));
+    // The cells of walls across x move 0.2 m off (from half a cell to 4.5 cells away: all of
+    // them beyond two cells), those along x slide along their wall and stay where they were.
+    assert!(shifted.mean_m > truth.mean_m + 0.05, "{shifted:?}");
+    let expected = truth.mean_m + shifted.far_fraction * (0.2 - truth.mean_m);
+    assert!(
+        (shifted.mean_m - expected).abs() < 0.01,
+        "{shifted:?}, expected {expected}"
+    );
+    assert!(shifted.far_fraction > 0.25, "{shifted:?}");
+    let split = score(
+        &w,
+        &scans,
+        &true_pose_grid(&scans, GridConfig::default(), true, |k| {
+            [0.0, if k % 2 == 0 { 0.15 } else { 0.0 }]
+        }),
+    );
     println!("alternate scans 0.15 m apart {split:?}");
+    // Walls across y are seen twice, 3 cells apart: about half their cells are off by 0.15 m.
+    assert!(split.mean_m > truth.mean_m + 0.025, "{split:?}");
+    assert!(split.far_fraction > 0.15, "{split:?}");
 }

@@ -235,3 +235,35 @@ fn bad_configurations_name_the_field() {
         assert!(e.contains(field), "{e}");
     }
 }
+
+#[test]
+fn a_few_hits_just_beyond_a_well_hit_wall_are_not_a_second_wall() {
+    // Forty beams end in the wall cell at x = 2.02 m, three overshoot into the next cell
+    // (no beam ever passes through it, so its hit ratio is 1); a post 1 m away is hit twice.
+    let mut scan = PreparedScan::new();
+    for _ in 0..40 {
+        scan.push_hit(Vec2::new(2.02, 0.01));
+    }
+    for _ in 0..3 {
+        scan.push_hit(Vec2::new(2.07, 0.01));
+    }
+    for _ in 0..2 {
+        scan.push_hit(Vec2::new(1.02, 1.01));
+    }
+    for fraction in [0.25, 0.0] {
+        let mut g = OccupancyGrid::new(GridConfig {
+            neighbour_hit_fraction: fraction,
+            ..GridConfig::default()
+        })
+        .unwrap();
+        g.insert(Pose2::default(), &scan).unwrap();
+        assert_eq!(g.state_at(Vec2::new(2.02, 0.01)), CellState::Occupied);
+        assert_eq!(g.state_at(Vec2::new(1.02, 1.01)), CellState::Occupied);
+        let beyond = if fraction > 0.0 {
+            CellState::Unknown
+        } else {
+            CellState::Occupied
+        };
+        assert_eq!(g.state_at(Vec2::new(2.07, 0.01)), beyond, "{fraction}");
+    }
+}

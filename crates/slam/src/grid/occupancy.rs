@@ -178,7 +178,30 @@ impl OccupancyGrid {
 
     pub fn state(&self, cell: Cell) -> CellState {
         let (h, m) = self.tiles.counts(cell);
-        classify(&self.config, h, m)
+        self.state_of(cell, h, m)
+    }
+
+    /// The state from a cell's counts, with the neighbour rule of
+    /// [`GridConfig::neighbour_hit_fraction`]: only cells the ratio calls occupied look at
+    /// their eight neighbours, so the rule costs little.
+    fn state_of(&self, cell: Cell, h: u16, m: u16) -> CellState {
+        let state = classify(&self.config, h, m);
+        let fraction = self.config.neighbour_hit_fraction;
+        if state != CellState::Occupied || fraction <= 0.0 {
+            return state;
+        }
+        let mut most = 0;
+        for dj in -1..=1 {
+            for di in -1..=1 {
+                let n = Cell::new(cell.i.saturating_add(di), cell.j.saturating_add(dj));
+                most = most.max(self.tiles.counts(n).0);
+            }
+        }
+        if f32::from(h) < fraction * f32::from(most) {
+            CellState::Unknown
+        } else {
+            state
+        }
     }
 
     /// The state of the cell holding a map-frame point.
@@ -188,13 +211,11 @@ impl OccupancyGrid {
 
     /// Every occupied cell (in tile order).
     pub fn occupied_cells(&self) -> impl Iterator<Item = Cell> + '_ {
-        let config = self.config;
         self.tiles.iter().flat_map(move |(corner, tile)| {
             (0..TILE * TILE)
-                .filter(move |&k| {
-                    classify(&config, tile.hits[k], tile.misses[k]) == CellState::Occupied
-                })
-                .map(move |k| cell_at(corner, k))
+                .map(move |k| (cell_at(corner, k), tile.hits[k], tile.misses[k]))
+                .filter(move |&(c, h, m)| self.state_of(c, h, m) == CellState::Occupied)
+                .map(|(c, _, _)| c)
         })
     }
 
@@ -205,7 +226,7 @@ impl OccupancyGrid {
 }
 
 /// The state of a cell with `h` hits and `m` misses.
-pub(super) fn classify(config: &GridConfig, h: u16, m: u16) -> CellState {
+fn classify(config: &GridConfig, h: u16, m: u16) -> CellState {
     let n = f32::from(h) + f32::from(m);
     if n == 0.0 {
         CellState::Unknown
