@@ -2,11 +2,12 @@
 //! what the Intel lab log gives at one keyframe every 0.5 m or 0.5 rad) of 180 and 360 beams,
 //! in a 30 m square building whose 4 m wide ring corridor the keyframes follow, so beams run
 //! from 2 m across the corridor to 26 m along it (the mean is printed). Also one scan inserted
-//! on its own, the online cost per keyframe.
+//! on its own, the online cost per keyframe, and the map images made from the rebuilt grid.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use plumbline_core::geom::{Pose2, Vec2};
-use plumbline_slam::grid::{GridConfig, OccupancyGrid, PreparedScan};
+use plumbline_slam::grid::{GridConfig, OccupancyGrid, PreparedScan, Raster};
+use plumbline_slam::map_files;
 use std::hint::black_box;
 
 const KEYFRAMES: usize = 1500;
@@ -113,6 +114,17 @@ fn bench(c: &mut Criterion) {
                 bch.iter(|| {
                     grid.rebuild(poses.iter().copied().zip(&scans)).unwrap();
                     black_box(grid.scans())
+                })
+            },
+        );
+        c.bench_function(
+            &format!("map images ({beams} beams): raster, PGM, PNG"),
+            |bch| {
+                bch.iter(|| {
+                    let raster = Raster::from_grid(&grid).unwrap().unwrap();
+                    let pgm = map_files::pgm_bytes(&raster);
+                    let png = map_files::png_rgb(&raster, &poses).unwrap();
+                    black_box((pgm.len(), png.len()))
                 })
             },
         );

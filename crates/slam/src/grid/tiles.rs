@@ -4,6 +4,7 @@
 //! tile bounding box: one pointer per 64 x 64 cells, which keeps a cell lookup to two loads.
 
 use super::frame::{Cell, CellRect};
+use super::raycast::Line;
 
 /// Tiles are `TILE` x `TILE` cells.
 pub const TILE_SHIFT: u32 = 6;
@@ -145,24 +146,23 @@ impl Tiles {
     /// looked up once a run (up to 64 cells) and each cell costs an increment and two adds.
     /// Both cells must lie inside the covered rectangle.
     pub fn add_misses_along(&mut self, from: Cell, to: Cell) {
-        let dx = i64::from(to.i) - i64::from(from.i);
-        let dy = i64::from(to.j) - i64::from(from.j);
-        let (adx, ady) = (dx.abs(), dy.abs());
-        let (sx, sy) = (dx.signum() as i32, dy.signum() as i32);
-        let ((major, major_step), (minor, minor_step)) = if adx >= ady {
-            ((adx, (sx, 0)), (ady, (0, sy)))
-        } else {
-            ((ady, (0, sy)), (adx, (sx, 0)))
-        };
+        let line = Line::new(from, to);
+        let Line {
+            major,
+            minor,
+            major_step,
+            minor_step,
+        } = line;
         let offset_step = |(di, dj): (i32, i32)| di as isize + (dj as isize) * TILE as isize;
         let (major_off, minor_off) = (offset_step(major_step), offset_step(minor_step));
+        let (sx, sy) = (major_step.0 + minor_step.0, major_step.1 + minor_step.1);
         // Steps possible along one axis before leaving the tile (unbounded on a still axis).
         let room = |local: i32, step: i32| match step {
             1 => (TILE_MASK - local) as i64,
             -1 => local as i64,
             _ => i64::MAX,
         };
-        let mut err = 2 * minor - major;
+        let mut err = line.first_err();
         let mut cell = from;
         let mut left = major;
         while left > 0 {
@@ -186,15 +186,11 @@ impl Tiles {
                 off += major_off;
                 err += 2 * minor;
             }
-            let moved = |axis: usize| {
-                let (a, b) = if axis == 0 {
-                    (major_step.0, minor_step.0)
-                } else {
-                    (major_step.1, minor_step.1)
-                };
-                (i64::from(a) * run + i64::from(b) * minor_steps) as i32
-            };
-            cell = Cell::new(cell.i + moved(0), cell.j + moved(1));
+            let moved = |a: i32, b: i32| (i64::from(a) * run + i64::from(b) * minor_steps) as i32;
+            cell = Cell::new(
+                cell.i + moved(major_step.0, minor_step.0),
+                cell.j + moved(major_step.1, minor_step.1),
+            );
             left -= run;
         }
     }
