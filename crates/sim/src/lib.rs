@@ -13,6 +13,7 @@ pub mod battery;
 pub mod clearance;
 pub mod disturb;
 pub mod dynamics;
+pub mod map_error;
 pub mod math;
 pub mod motors;
 pub mod nearby;

@@ -12,6 +12,7 @@ pub mod grid;
 pub mod guard;
 pub mod keyframe;
 pub mod loops;
+pub mod map_files;
 pub mod slam;
 pub mod tracker;
 pub mod worker;

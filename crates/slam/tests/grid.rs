@@ -2,28 +2,10 @@
 
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::scan::Beam;
-use plumbline_slam::grid::{CellState, GridConfig, GridError, OccupancyGrid, PreparedScan, Raster};
+mod common;
 
-/// Beams from `pose` to the walls of the axis-aligned room [0, w] x [0, h] (exact ranges).
-fn room_scan(pose: Pose2, w: f32, h: f32, beams: usize) -> Vec<Beam> {
-    (0..beams)
-        .map(|k| {
-            let a = k as f32 * core::f32::consts::TAU / beams as f32 - core::f32::consts::PI;
-            let (dx, dy) = ((pose.theta + a).cos(), (pose.theta + a).sin());
-            let tx = if dx > 0.0 {
-                (w - pose.x) / dx
-            } else {
-                -pose.x / dx
-            };
-            let ty = if dy > 0.0 {
-                (h - pose.y) / dy
-            } else {
-                -pose.y / dy
-            };
-            Beam::new(a, tx.min(ty))
-        })
-        .collect()
-}
+use common::room_scan;
+use plumbline_slam::grid::{CellState, GridConfig, GridError, OccupancyGrid, PreparedScan, Raster};
 
 fn grid() -> OccupancyGrid {
     OccupancyGrid::new(GridConfig::default()).unwrap()
@@ -146,8 +128,8 @@ fn scans_beyond_the_bounds_are_refused_whole_and_change_nothing() {
     let e = g
         .insert_scan(
             wide,
-            &room_scan(Pose2::new(1.0, 1.0, 0.0), 4.0, 3.0, 360),
-            10.0,
+            &room_scan(Pose2::new(1.0, 1.0, 0.0), 12.0, 3.0, 360),
+            15.0,
         )
         .unwrap_err();
     assert!(matches!(e, GridError::TooManyCells { .. }), "{e}");
@@ -251,5 +233,37 @@ fn bad_configurations_name_the_field() {
     ] {
         let e = OccupancyGrid::new(c).unwrap_err().to_string();
         assert!(e.contains(field), "{e}");
+    }
+}
+
+#[test]
+fn a_few_hits_just_beyond_a_well_hit_wall_are_not_a_second_wall() {
+    // Forty beams end in the wall cell at x = 2.02 m, three overshoot into the next cell
+    // (no beam ever passes through it, so its hit ratio is 1); a post 1 m away is hit twice.
+    let mut scan = PreparedScan::new();
+    for _ in 0..40 {
+        scan.push_hit(Vec2::new(2.02, 0.01));
+    }
+    for _ in 0..3 {
+        scan.push_hit(Vec2::new(2.07, 0.01));
+    }
+    for _ in 0..2 {
+        scan.push_hit(Vec2::new(1.02, 1.01));
+    }
+    for fraction in [0.25, 0.0] {
+        let mut g = OccupancyGrid::new(GridConfig {
+            neighbour_hit_fraction: fraction,
+            ..GridConfig::default()
+        })
+        .unwrap();
+        g.insert(Pose2::default(), &scan).unwrap();
+        assert_eq!(g.state_at(Vec2::new(2.02, 0.01)), CellState::Occupied);
+        assert_eq!(g.state_at(Vec2::new(1.02, 1.01)), CellState::Occupied);
+        let beyond = if fraction > 0.0 {
+            CellState::Unknown
+        } else {
+            CellState::Occupied
+        };
+        assert_eq!(g.state_at(Vec2::new(2.07, 0.01)), beyond, "{fraction}");
     }
 }

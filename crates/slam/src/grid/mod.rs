@@ -50,6 +50,11 @@ pub struct GridConfig {
     pub occupied_ratio: f32,
     /// A cell whose hit ratio is at most this is free (map_server's `free_thresh`).
     pub free_ratio: f32,
+    /// An occupied cell with fewer hits than this fraction of the most-hit of its eight
+    /// neighbours is shown unknown instead: range noise scatters a few hits just beyond a wall,
+    /// where no beam passes to clear them, and they would thicken every wall by a cell or two
+    /// on its far side. 0 turns the rule off.
+    pub neighbour_hit_fraction: f32,
     /// How far an invalid ("no return") beam clears free space, m; `None`: not at all (see
     /// [`PreparedScan::from_beams`] for why that is the default).
     pub no_return_clear_m: Option<f32>,
@@ -63,6 +68,7 @@ impl Default for GridConfig {
             max_cells: 8 << 20,
             occupied_ratio: 0.65,
             free_ratio: 0.196,
+            neighbour_hit_fraction: 0.25,
             no_return_clear_m: None,
         }
     }
@@ -95,6 +101,10 @@ impl GridConfig {
             return bad(format!(
                 "thresholds need 0 <= free_ratio < occupied_ratio <= 1, got {f} and {o}"
             ));
+        }
+        let n = self.neighbour_hit_fraction;
+        if !(0.0..=1.0).contains(&n) {
+            return bad(format!("neighbour_hit_fraction {n} must lie in 0..=1"));
         }
         if let Some(d) = self.no_return_clear_m {
             if !(d.is_finite() && d > 0.0) {

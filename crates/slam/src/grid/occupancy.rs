@@ -2,7 +2,6 @@
 
 use super::frame::{Cell, CellRect, GridFrame};
 use super::prepared::PreparedScan;
-use super::raycast::trace;
 use super::tiles::{cell_at, Tiles, TILE};
 use super::{CellState, GridConfig, GridError};
 use plumbline_core::geom::{Pose2, Vec2};
@@ -106,13 +105,14 @@ impl OccupancyGrid {
             rect.include(cell);
             self.ends.push(cell);
         }
+        let scan_rect = rect;
         let rect = self.bounds.map_or(rect, |b| b.union(rect));
-        self.check_room(rect, farthest)?;
+        self.check_room(rect, scan_rect, farthest)?;
         self.tiles.cover(rect);
         let tiles = &mut self.tiles;
         let hits = scan.hits().len();
         for (k, &end) in self.ends.iter().enumerate() {
-            trace(origin, end, |cell| tiles.add_miss(cell));
+            tiles.add_misses_along(origin, end);
             if k < hits {
                 tiles.add_hit(end);
             } else {
@@ -124,14 +124,19 @@ impl OccupancyGrid {
         Ok(())
     }
 
-    /// Refuses a scan that would widen the map past the extent, or might need more tiles than
-    /// the budget allows (counted over the new bounds' unallocated tiles: an upper bound, so
-    /// the refusal can come before any change).
-    fn check_room(&self, rect: CellRect, farthest_m: f32) -> Result<(), GridError> {
+    /// Refuses a scan that would widen the map (to `rect`) past the extent, or might need more
+    /// tiles than the budget allows (counted over the unallocated tiles of the scan's own
+    /// rectangle: an upper bound, so the refusal can come before any change).
+    fn check_room(
+        &self,
+        rect: CellRect,
+        scan_rect: CellRect,
+        farthest_m: f32,
+    ) -> Result<(), GridError> {
         let r = self.config.resolution_m;
         let span_m = [rect.width() as f32 * r, rect.height() as f32 * r];
         let max = self.config.max_extent_m;
-        if !(farthest_m <= max) || span_m[0] > max || span_m[1] > max {
+        if farthest_m.is_nan() || farthest_m > max || span_m[0] > max || span_m[1] > max {
             return Err(GridError::TooWide {
                 span_m,
                 farthest_m,
@@ -139,8 +144,9 @@ impl OccupancyGrid {
             });
         }
         let max_tiles = self.config.max_cells.div_ceil(TILE * TILE);
-        if self.tiles.allocated() + self.tiles.missing_in(rect) > max_tiles {
-            let needed = (self.tiles.allocated() + self.tiles.missing_in(rect)) * TILE * TILE;
+        let tiles = self.tiles.allocated() + self.tiles.missing_in(scan_rect);
+        if tiles > max_tiles {
+            let needed = tiles * TILE * TILE;
             return Err(GridError::TooManyCells {
                 needed,
                 max_cells: self.config.max_cells,
@@ -172,7 +178,30 @@ impl OccupancyGrid {
 
     pub fn state(&self, cell: Cell) -> CellState {
         let (h, m) = self.tiles.counts(cell);
-        classify(&self.config, h, m)
+        self.state_of(cell, h, m)
+    }
+
+    /// The state from a cell's counts, with the neighbour rule of
+    /// [`GridConfig::neighbour_hit_fraction`]: only cells the ratio calls occupied look at
+    /// their eight neighbours, so the rule costs little.
+    fn state_of(&self, cell: Cell, h: u16, m: u16) -> CellState {
+        let state = classify(&self.config, h, m);
+        let fraction = self.config.neighbour_hit_fraction;
+        if state != CellState::Occupied || fraction <= 0.0 {
+            return state;
+        }
+        let mut most = 0;
+        for dj in -1..=1 {
+            for di in -1..=1 {
+                let n = Cell::new(cell.i.saturating_add(di), cell.j.saturating_add(dj));
+                most = most.max(self.tiles.counts(n).0);
+            }
+        }
+        if f32::from(h) < fraction * f32::from(most) {
+            CellState::Unknown
+        } else {
+            state
+        }
     }
 
     /// The state of the cell holding a map-frame point.
@@ -182,13 +211,11 @@ impl OccupancyGrid {
 
     /// Every occupied cell (in tile order).
     pub fn occupied_cells(&self) -> impl Iterator<Item = Cell> + '_ {
-        let config = self.config;
         self.tiles.iter().flat_map(move |(corner, tile)| {
             (0..TILE * TILE)
-                .filter(move |&k| {
-                    classify(&config, tile.hits[k], tile.misses[k]) == CellState::Occupied
-                })
-                .map(move |k| cell_at(corner, k))
+                .map(move |k| (cell_at(corner, k), tile.hits[k], tile.misses[k]))
+                .filter(move |&(c, h, m)| self.state_of(c, h, m) == CellState::Occupied)
+                .map(|(c, _, _)| c)
         })
     }
 
@@ -199,7 +226,7 @@ impl OccupancyGrid {
 }
 
 /// The state of a cell with `h` hits and `m` misses.
-pub(super) fn classify(config: &GridConfig, h: u16, m: u16) -> CellState {
+fn classify(config: &GridConfig, h: u16, m: u16) -> CellState {
     let n = f32::from(h) + f32::from(m);
     if n == 0.0 {
         CellState::Unknown

@@ -3,7 +3,7 @@
 //! the PGM, the PNG and the path drawn on it are aligned pixel for pixel.
 
 use super::frame::{Cell, CellRect, GridFrame};
-use super::occupancy::{classify, OccupancyGrid};
+use super::occupancy::OccupancyGrid;
 use super::{CellState, GridError};
 use plumbline_core::geom::Vec2;
 
@@ -40,10 +40,7 @@ impl Raster {
         let mut states = Vec::with_capacity(width * height);
         for row in 0..height {
             let j = rect.max.j - row as i32;
-            states.extend((rect.min.i..=rect.max.i).map(|i| {
-                let (hits, misses) = grid.counts(Cell::new(i, j));
-                classify(grid.config(), hits, misses)
-            }));
+            states.extend((rect.min.i..=rect.max.i).map(|i| grid.state(Cell::new(i, j))));
         }
         Ok(Some(Raster {
             width,

@@ -7,33 +7,64 @@
 
 use super::frame::Cell;
 
+/// Bresenham's stepping for one line: it advances `major_step` every step and, when the
+/// decision variable says the ideal line has passed half a cell, `minor_step` too.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Line {
+    /// Steps (cells after the first) along the major axis.
+    pub major: i64,
+    pub minor: i64,
+    pub major_step: (i32, i32),
+    pub minor_step: (i32, i32),
+}
+
+impl Line {
+    #[inline]
+    pub fn new(from: Cell, to: Cell) -> Line {
+        let dx = i64::from(to.i) - i64::from(from.i);
+        let dy = i64::from(to.j) - i64::from(from.j);
+        let (sx, sy) = (dx.signum() as i32, dy.signum() as i32);
+        if dx.abs() >= dy.abs() {
+            Line {
+                major: dx.abs(),
+                minor: dy.abs(),
+                major_step: (sx, 0),
+                minor_step: (0, sy),
+            }
+        } else {
+            Line {
+                major: dy.abs(),
+                minor: dx.abs(),
+                major_step: (0, sy),
+                minor_step: (sx, 0),
+            }
+        }
+    }
+
+    /// The decision variable before the first step: twice the minor-axis offset from the
+    /// ideal line, scaled by the major length, less half a cell.
+    pub fn first_err(&self) -> i64 {
+        2 * self.minor - self.major
+    }
+}
+
 /// Calls `visit` for every cell on the line from `from` up to, but not including, `to`: the
 /// cells a beam passes through before the cell it ends in. Each cell is visited once, in order.
 #[inline]
 pub fn trace(from: Cell, to: Cell, mut visit: impl FnMut(Cell)) {
-    let dx = i64::from(to.i) - i64::from(from.i);
-    let dy = i64::from(to.j) - i64::from(from.j);
-    let (adx, ady) = (dx.abs(), dy.abs());
-    let (sx, sy) = (dx.signum() as i32, dy.signum() as i32);
-    // Walk the major axis one cell a step; `err` tracks twice the minor-axis offset from the
-    // ideal line, scaled by the major length, so the minor axis steps when it passes half a cell.
-    let ((major, major_step), (minor, minor_step)) = if adx >= ady {
-        ((adx, (sx, 0)), (ady, (0, sy)))
-    } else {
-        ((ady, (0, sy)), (adx, (sx, 0)))
-    };
+    let line = Line::new(from, to);
     let (mut i, mut j) = (from.i, from.j);
-    let mut err = 2 * minor - major;
-    for _ in 0..major {
+    let mut err = line.first_err();
+    for _ in 0..line.major {
         visit(Cell::new(i, j));
         if err > 0 {
-            i += minor_step.0;
-            j += minor_step.1;
-            err -= 2 * major;
+            i += line.minor_step.0;
+            j += line.minor_step.1;
+            err -= 2 * line.major;
         }
-        i += major_step.0;
-        j += major_step.1;
-        err += 2 * minor;
+        i += line.major_step.0;
+        j += line.major_step.1;
+        err += 2 * line.minor;
     }
 }
 

@@ -1,5 +1,6 @@
-//! Seeded synthetic pose graphs with known ground truth, shared by the graph tests and the
-//! graph benchmark (which includes this file by path).
+//! Synthetic data with known ground truth shared by the integration tests: seeded pose
+//! graphs (also used by the graph benchmark, which includes this file by path) and scans of a
+//! known room.
 //!
 //! The vehicle walks a Manhattan world: one metre a step along a grid inside a square box,
 //! turning a quarter turn at random or at the box's edge, so it keeps coming back to cells it
@@ -7,6 +8,8 @@
 //! node in the same cell. Initial poses compose the noisy odometry, as a front end would.
 #![allow(dead_code)] // each test binary uses a different part
 
+use plumbline_core::geom::Pose2;
+use plumbline_core::scan::Beam;
 use plumbline_slam::graph::{diagonal_information, Edge, EdgeKind, NodeId, Pose2d, PoseGraph};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
@@ -165,4 +168,26 @@ pub fn bench_graph(seed: u64, nodes: usize, loops: usize) -> (PoseGraph, Vec<Pos
         .map(|(i, j)| loop_edge(&mut rng, &truth, i, j))
         .collect();
     (graph, truth, edges)
+}
+
+/// Beams from `pose` to the walls of the axis-aligned room [0, w] x [0, h] (exact ranges),
+/// evenly spread over the full turn.
+pub fn room_scan(pose: Pose2, w: f32, h: f32, beams: usize) -> Vec<Beam> {
+    (0..beams)
+        .map(|k| {
+            let a = k as f32 * core::f32::consts::TAU / beams as f32 - core::f32::consts::PI;
+            let (dx, dy) = ((pose.theta + a).cos(), (pose.theta + a).sin());
+            let tx = if dx > 0.0 {
+                (w - pose.x) / dx
+            } else {
+                -pose.x / dx
+            };
+            let ty = if dy > 0.0 {
+                (h - pose.y) / dy
+            } else {
+                -pose.y / dy
+            };
+            Beam::new(a, tx.min(ty))
+        })
+        .collect()
 }
