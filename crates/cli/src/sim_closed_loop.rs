@@ -115,10 +115,7 @@ pub fn prepare(
     if scenario.starts_with("hold") {
         config.pushes.push(PUSH);
     }
-    let mut script = Script {
-        arm: vec![(ARM_AT_S, true)],
-        lidar_dies_at_s: None,
-    };
+    let mut script = Script::arm_at(ARM_AT_S);
     match scenario {
         "lidar-failure" => script.lidar_dies_at_s = Some(LIDAR_DIES_AT_S),
         "land-on-low-battery" => config.vehicle.battery.initial_soc = LOW_BATTERY_SOC,

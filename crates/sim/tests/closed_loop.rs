@@ -3,7 +3,7 @@
 //! `FlightSoftware` interface. Seed 000 Fig. 8-9: ICL displacement drives the hold.
 
 use plumbline_core::matching::OdometryConfig;
-use plumbline_core::msgs::{FailsafeReason, FlightMode};
+use plumbline_core::msgs::{FailsafeReason, FlightMode, PilotInput};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
 use plumbline_sim::onboard_link::{autopilot_for, FlightLog, OnboardLink, Script, XV11_BEAMS};
@@ -26,9 +26,18 @@ impl Recorder for Truth {
     }
 }
 
-fn fly(config: &SimConfig, arm: Vec<(f64, bool)>, lidar_dies_at_s: Option<f64>) -> (Status, Log) {
+fn fly(config: &SimConfig, arm: &[(f64, bool)], lidar_dies_at_s: Option<f64>) -> (Status, Log) {
     let script = Script {
-        arm,
+        radio: arm
+            .iter()
+            .map(|&(t, arm)| {
+                let radio = PilotInput {
+                    arm,
+                    ..PilotInput::default()
+                };
+                (t, radio)
+            })
+            .collect(),
         lidar_dies_at_s,
     };
     let (link, log) = OnboardLink::<XV11_BEAMS>::new(
@@ -88,7 +97,7 @@ fn hold_error(log: &Log, start: [f64; 2], from_s: f64, to_s: f64) -> (f64, f64) 
 fn holds_over_the_start_through_a_push_and_lands() {
     let c = pushed_room(11, 15.0, 34.0);
     let start = [c.world.start[0], c.world.start[1]];
-    let (status, log) = fly(&c, vec![(0.5, true), (25.0, false)], None);
+    let (status, log) = fly(&c, &[(0.5, true), (25.0, false)], None);
     println!("modes {:?}", log.onboard.modes);
     assert_eq!(status, Status::Completed);
     let (rms, max) = hold_error(&log, start, 8.0, 15.0);
@@ -128,7 +137,7 @@ fn holds_over_the_start_through_a_push_and_lands() {
 fn a_keyframe_taken_in_the_swing_after_a_push_does_not_shift_the_hold() {
     let c = pushed_room(58, 20.0, 45.0);
     let start = [c.world.start[0], c.world.start[1]];
-    let (status, log) = fly(&c, vec![(0.5, true)], None);
+    let (status, log) = fly(&c, &[(0.5, true)], None);
     assert_eq!(status, Status::Completed);
     let (rms, max) = hold_error(&log, start, 25.0, 45.0);
     println!("seed 58, 5-25 s after the push: rms {rms:.4} m, max {max:.4} m");
@@ -147,7 +156,7 @@ fn twenty_seeds_of_lidar_failure_land_near_where_the_lidar_stopped() {
     for seed in 300..320 {
         let mut c = room(seed);
         c.max_duration_s = 15.0;
-        let (status, log) = fly(&c, vec![(0.5, true)], Some(DIES_AT_S));
+        let (status, log) = fly(&c, &[(0.5, true)], Some(DIES_AT_S));
         let at = |t: f64| log.truth.iter().find(|s| s.t_s >= t).or(log.truth.last());
         let (Some(stop), Some(end)) = (at(DIES_AT_S), log.truth.last()) else {
             failures.push((seed, "no truth".to_string()));
@@ -180,7 +189,7 @@ fn a_hundred_seeds_of_hold_and_push_do_not_crash() {
     for seed in 100..200 {
         let c = pushed_room(seed, 20.0, 30.0);
         let start = [c.world.start[0], c.world.start[1]];
-        let (status, log) = fly(&c, vec![(0.5, true)], None);
+        let (status, log) = fly(&c, &[(0.5, true)], None);
         if status != Status::Completed {
             crashes.push((seed, status));
             continue;
