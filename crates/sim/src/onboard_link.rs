@@ -1,6 +1,6 @@
 //! The onboard flight stack of `plumbline-core` ([`Onboard`]: lidar odometry, EKF, cascaded
 //! PID, mixer, modes and failsafes) behind the runner's [`FlightSoftware`] interface, with a
-//! scripted pilot and lidar failure injection (issue 4's scenarios).
+//! scripted pilot's radio and lidar failure injection (what the closed-loop scenarios script).
 //!
 //! The runner consumes the flight software, so what the stack did (modes, failsafes, its
 //! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
