@@ -177,9 +177,9 @@ pub fn run(
     pilot: Pilot,
     recorder: &mut dyn Recorder,
 ) -> Result<Outcome, SetupError> {
-    let mut sim = Lockstep::new(config, pilot)?;
+    let (mut sim, mut body) = Lockstep::new(config, pilot)?;
     while sim.running() {
-        if let Err(end) = sim.step(recorder) {
+        if let Err(end) = sim.step(&mut body, recorder) {
             return Ok(sim.finish(end));
         }
     }
