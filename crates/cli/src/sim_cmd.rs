@@ -13,7 +13,7 @@ use plumbline_core::msgs::{ImuSample, SonarSample};
 use plumbline_io::carmen::{write_robotlaser1, LaserRecord};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
-use plumbline_sim::runner::{Recorder, SimConfig, StateSample, Status, TruthPose};
+use plumbline_sim::runner::{Recorder, SetupError, SimConfig, StateSample, Status, TruthPose};
 use plumbline_sim::scenario::{self, Report, ScenarioError};
 use plumbline_sim::sensors::lidar::{LidarProfile, LidarScan};
 use plumbline_sim::truth::relations;
@@ -341,7 +341,8 @@ fn scenario_error(args: &SimArgs, e: ScenarioError) -> CliError {
             ))
         }
         ScenarioError::World(e) => CliError(format!("{}: {e}", args.world)),
-        ScenarioError::Setup(e) => CliError(format!("--lidar {}: {e}", args.lidar)),
+        ScenarioError::Setup(e @ SetupError::World(_)) => CliError(format!("{}: {e}", args.world)),
+        ScenarioError::Setup(e) => CliError(e.to_string()),
     }
 }
 

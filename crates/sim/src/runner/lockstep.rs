@@ -125,19 +125,8 @@ impl<'c> Lockstep<'c> {
         config: &'c SimConfig,
         pilot: Pilot,
     ) -> Result<(Self, BodyState), SetupError> {
-        let v = &config.vehicle;
-        v.validate().map_err(SetupError::Vehicle)?;
-        let world = &config.world;
-        let start = [world.start[0], world.start[1]];
-        world
-            .check_free(start, v.radius_m, "start")
-            .map_err(SetupError::World)?;
-        if !(config.physics_hz.is_finite() && config.physics_hz >= 100.0) {
-            return Err(SetupError::Config(format!(
-                "physics rate {} Hz is below 100 Hz",
-                config.physics_hz
-            )));
-        }
+        let test_pilot = config.validate()?;
+        let (v, world) = (&config.vehicle, &config.world);
         let hz = config.physics_hz;
         let dt = 1.0 / hz;
         let mut mismatch_rng = Rng::fork(config.seed, stream::MISMATCH);
@@ -179,8 +168,6 @@ impl<'c> Lockstep<'c> {
             control_due: 0,
             state_due: state_every,
         };
-        let test_pilot = TestPilot::new(v)
-            .ok_or_else(|| SetupError::Config("rotor layout cannot be inverted".into()))?;
         let s = BodyState::at_rest(world.start_position(), world.start[2]);
         let out = Outcome {
             status: Status::Completed,

@@ -7,6 +7,7 @@
 
 use crate::disturb::{GustParams, Push};
 use crate::math::{Quat, Vec3};
+use crate::pilot::TestPilot;
 use crate::plan::Plan;
 use crate::power::EnergyTally;
 use crate::sensors::imu::ImuParams;
@@ -53,6 +54,28 @@ impl SimConfig {
             seed,
             max_duration_s: 3600.0,
         }
+    }
+}
+
+impl SimConfig {
+    /// Checks everything a run needs before it starts: the vehicle, a start the vehicle fits
+    /// at, the physics rate. Returns the test pilot for the vehicle (its rotor layout must be
+    /// invertible). Callers that write files check first, so a refused run leaves none.
+    pub fn validate(&self) -> Result<TestPilot, SetupError> {
+        let v = &self.vehicle;
+        v.validate().map_err(SetupError::Vehicle)?;
+        let start = [self.world.start[0], self.world.start[1]];
+        self.world
+            .check_free(start, v.radius_m, "start")
+            .map_err(SetupError::World)?;
+        if !(self.physics_hz.is_finite() && self.physics_hz >= 100.0) {
+            return Err(SetupError::Config(format!(
+                "physics rate {} Hz is below 100 Hz",
+                self.physics_hz
+            )));
+        }
+        TestPilot::new(v)
+            .ok_or_else(|| SetupError::Config("rotor layout cannot be inverted".into()))
     }
 }
 

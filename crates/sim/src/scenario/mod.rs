@@ -192,7 +192,9 @@ impl Flight {
 
 impl Entry {
     /// Sets the scenario up on `config` (which it may change: duration, pushes, battery,
-    /// people) and checks the world's survey path is free for the vehicle.
+    /// people) and checks the result: the world's survey path free for the vehicle, and
+    /// everything the runner needs ([`SimConfig::validate`]). A flight that is returned
+    /// starts; nothing is refused after this, so callers may create their output files.
     pub fn prepare(
         &self,
         options: &Options,
@@ -213,6 +215,7 @@ impl Entry {
                 .check_free(*p, config.vehicle.radius_m, "survey waypoint")
                 .map_err(ScenarioError::World)?;
         }
+        config.validate().map_err(ScenarioError::Setup)?;
         Ok(flight)
     }
 }
