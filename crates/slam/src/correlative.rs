@@ -212,7 +212,7 @@ impl LookupGrid {
                 ix += top_step;
             }
         }
-        roots.sort_by(|a, b| b.bound.cmp(&a.bound));
+        roots.sort_by_key(|c| std::cmp::Reverse(c.bound));
         for root in roots {
             search.expand(&cells, root, half);
         }
@@ -310,7 +310,7 @@ impl Search<'_> {
                 bound,
             });
         }
-        children.sort_by(|a, b| b.bound.cmp(&a.bound));
+        children.sort_by_key(|c| std::cmp::Reverse(c.bound));
         for child in children {
             self.expand(cells, child, half);
         }

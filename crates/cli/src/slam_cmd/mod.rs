@@ -1,14 +1,18 @@
-//! `plumbline slam LOG`: lidar SLAM over a log (DESIGN.md §4): a pose for every scan, the pose
-//! graph, the map.
+//! `plumbline slam LOG`: lidar SLAM over a log (DESIGN.md §4): a pose for every scan, the map
+//! as map_server files and a picture, the pose graph as g2o text, and, for a simulated log
+//! given its world, how far the map's walls lie from the true ones.
+
+mod outputs;
+mod truth;
 
 use crate::log_args::LogArgs;
-use crate::odometry_cmd::{write_file, MAX_BEAMS};
+use crate::odometry_cmd::{percentile, MAX_BEAMS};
 use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::Args;
 use plumbline_core::geom::Pose2;
 use plumbline_core::scan::Scan;
 use plumbline_io::carmen::OdomPose;
-use plumbline_io::trajectory::{write_trajectory, TrajectoryPoint};
+use plumbline_slam::map_files::check_writable;
 use plumbline_slam::{local_map_cells, Slam, SlamConfig};
 use serde_json::json;
 use std::path::PathBuf;
@@ -24,6 +28,21 @@ pub struct SlamArgs {
     /// Write the trajectory (`timestamp x y theta`, one line per scan) here.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Write the map as PREFIX.pgm + PREFIX.yaml (ROS map_server), PREFIX.png (a picture with
+    /// the path) and the pose graph as PREFIX.g2o.
+    #[arg(long, value_name = "PREFIX")]
+    pub map: Option<PathBuf>,
+    /// Draw every scan's points at its final pose, with the path, into this PNG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// The simulated world the log was flown in (a shipped name or a world file): score the
+    /// map against its walls (`map_error_m`). Needs --truth.
+    #[arg(long, requires = "truth")]
+    pub world: Option<String>,
+    /// The simulator's truth.txt for the log: where the map frame (the first scan's pose) lies
+    /// in the world.
+    #[arg(long, requires = "world")]
+    pub truth: Option<PathBuf>,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Print the summary as one JSON object.
@@ -33,11 +52,19 @@ pub struct SlamArgs {
 
 pub fn run(args: SlamArgs) -> CliResult {
     let wall = Instant::now();
-    let log = args.log_args.read(&args.log)?;
-    let mut config = SlamConfig::default();
-    if std::env::var("PL_NOLOOP").is_ok() {
-        config.loops.max_candidates = 0;
+    // Every output is checked before the work starts: a typo in a prefix should not cost the
+    // whole log.
+    if let Some(prefix) = &args.map {
+        check_writable(prefix)?;
     }
+    let truth = args
+        .world
+        .as_deref()
+        .zip(args.truth.as_deref())
+        .map(|(w, t)| truth::Truth::load(w, t))
+        .transpose()?;
+    let log = args.log_args.read(&args.log)?;
+    let config = SlamConfig::default();
     let mut cells = local_map_cells(&config);
     let mut slam: Slam<MAX_BEAMS> =
         Slam::new(config, &mut cells, true).map_err(|e| CliError(e.0))?;
@@ -66,7 +93,7 @@ pub fn run(args: SlamArgs) -> CliResult {
         let out = slam.add_scan(&scan, prior);
         times_us.push(start.elapsed().as_secs_f64() * 1e6);
         anchors.push((out.keyframe, out.relative));
-        // Time since the last scan counts as lost when this scan could not be matched.
+        // The time since the last scan counts as lost when this scan could not be matched.
         if out.predicted {
             lost_s += previous_stamp.map_or(0.0, |p| (rec.timestamp_s - p).abs());
         }
@@ -78,77 +105,44 @@ pub fn run(args: SlamArgs) -> CliResult {
     let finished = slam
         .finish()
         .ok_or_else(|| CliError("the SLAM back end stopped unexpectedly".into()))?;
-    let poses = finished.backend.poses();
-    if let Ok(path) = std::env::var("PL_DUMP_LOOPS") {
-        let kfs = finished.backend.keyframes();
-        let mut text = String::new();
-        for e in finished
-            .backend
-            .graph()
-            .edges()
-            .iter()
-            .filter(|e| e.kind == plumbline_slam::graph::EdgeKind::Loop)
-        {
-            text += &format!(
-                "{:.6} {:.6} {} {} {}\n",
-                kfs[e.from.index()].stamp_s,
-                kfs[e.to.index()].stamp_s,
-                e.measurement.x,
-                e.measurement.y,
-                e.measurement.theta
-            );
-        }
-        std::fs::write(path, text).ok();
-    }
-    let trajectory: Vec<TrajectoryPoint> = log
-        .scans
-        .iter()
-        .zip(&anchors)
-        .map(|(rec, &(kf, rel))| TrajectoryPoint {
-            timestamp_text: rec.timestamp_text.clone(),
-            timestamp_s: rec.timestamp_s,
-            pose: OdomPose::from_f32(kf.map_or(rel, |k| poses[k].compose(rel))),
-        })
-        .collect();
-    if let Some(path) = &args.out {
-        write_file(path, |w| write_trajectory(w, &trajectory))?;
-    }
+    let backend = &finished.backend;
+    let trajectory = outputs::trajectory(&log.scans, &anchors, backend.poses());
+    let written = outputs::write(&args, &log.scans, &trajectory, backend)?;
+    let map_error = match (&truth, &written.grid) {
+        (Some(truth), Some(grid)) => truth.map_error(grid, &log.scans[0])?,
+        (Some(truth), None) => truth.map_error(&outputs::grid(backend)?, &log.scans[0])?,
+        _ => None,
+    };
     times_us.sort_by(f64::total_cmp);
-    let stats = finished.backend.stats();
+    let stats = backend.stats();
     let duration = log.scans.last().map_or(0.0, |l| l.timestamp_s)
         - log.scans.first().map_or(0.0, |f| f.timestamp_s);
     let wall_s = wall.elapsed().as_secs_f64();
     let summary = json!({
         "scans": tracking.scans,
         "keyframes": stats.keyframes,
+        "submaps": stats.keyframes.div_ceil(config.keyframes_per_submap.max(1)),
         "loop_candidates": stats.loop_candidates,
         "loop_closures_accepted": stats.loops_accepted,
         "loop_closures_rejected": stats.loops_rejected,
+        "loop_closures_downweighted": stats.loops_downweighted,
         "optimisations": stats.optimisations,
         "keyframes_thinned": stats.thinned,
-        "loop_closures_downweighted": stats.loops_downweighted,
-        "beams_held": stats.beams_held,
-        "loop_rejections": stats.rejections,
         "relocalizations": tracking.guess_searches_used,
         "relocalizations_failed": tracking.guess_searches_failed,
         "predicted_scans": tracking.predicted_scans,
         "lost_s": lost_s,
         "wall_s": wall_s,
-        "realtime_factor": duration / wall_s,
+        "realtime_factor": if wall_s > 0.0 { duration / wall_s } else { 0.0 },
         "median_scan_us": percentile(&times_us, 0.5),
         "p99_scan_us": percentile(&times_us, 0.99),
         "peak_rss_mb": peak_rss_mb(),
+        "map_error_m": map_error.as_ref().map(|e| e.mean_m),
+        "map_error_far_fraction": map_error.as_ref().map(|e| e.far_fraction),
+        "map_occupied_cells": written.grid.as_ref().map(|g| g.occupied_cells().count()),
     });
     print_summary(&summary, args.json);
     Ok(())
-}
-
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return 0.0;
-    }
-    let k = ((sorted.len() as f64 * p).ceil() as usize).clamp(1, sorted.len()) - 1;
-    (sorted[k] * 100.0).round() / 100.0
 }
 
 /// The process's peak resident memory, MB, from Linux's `/proc/self/status` (`None` elsewhere).
