@@ -14,7 +14,7 @@
 use super::edge::{EdgeId, EdgeKind, NodeId};
 use super::graduation::{edge_kernels, stage_kernels};
 use super::kernel::LoopKernel;
-use super::pattern::Pattern;
+use super::pattern::{anchored_nodes, Pattern};
 use super::pose::Pose2d;
 use super::pose_graph::PoseGraph;
 use super::residual::{chi2, linearize, mul, mul_vec, transpose_mul};
@@ -111,6 +111,9 @@ impl PoseGraph {
                 Ok(p) => self.pattern = p,
                 Err(_) => report.stop = StopReason::OutOfMemory,
             }
+        }
+        if self.pattern.is_none() {
+            report.anchored = anchored_nodes(self.fixed_flags(), self.edges());
         }
         if let Some(pattern) = self.pattern.take() {
             report.anchored = pattern.anchored.clone();

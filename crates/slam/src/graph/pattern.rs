@@ -122,6 +122,11 @@ impl Pattern {
     }
 }
 
+/// Nodes held only for the gauge (see [`held_nodes`]).
+pub(super) fn anchored_nodes(fixed: &[bool], edges: &[Edge]) -> Vec<NodeId> {
+    held_nodes(fixed, edges).anchored
+}
+
 struct Held {
     held: Vec<bool>,
     anchored: Vec<NodeId>,
