@@ -51,9 +51,9 @@ impl Pattern {
         let held = held_nodes(fixed, edges);
         let mut var_of_node = vec![None; n];
         let mut node_of_var = Vec::new();
-        for node in 0..n {
+        for (node, var) in var_of_node.iter_mut().enumerate() {
             if !held.held[node] {
-                var_of_node[node] = Some(node_of_var.len());
+                *var = Some(node_of_var.len());
                 node_of_var.push(node);
             }
         }
