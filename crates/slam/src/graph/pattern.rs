@@ -10,9 +10,7 @@
 //! array instead of sorting triplets every iteration.
 
 use super::edge::{Edge, NodeId};
-use faer::sparse::linalg::solvers::SymbolicLlt;
-use faer::sparse::SymbolicSparseColMatRef;
-use faer::Side;
+use super::solver::Solver;
 
 /// Where one edge adds into the Hessian's value array.
 #[derive(Clone, Copy, Debug)]
@@ -38,7 +36,7 @@ pub(super) struct Pattern {
     pub edges: Vec<EdgeSlots>,
     /// Nodes held still only because nothing joins their component to a fixed node.
     pub anchored: Vec<NodeId>,
-    pub symbolic: SymbolicLlt<usize>,
+    pub solver: Solver,
 }
 
 impl Pattern {
@@ -105,10 +103,13 @@ impl Pattern {
                 }
             })
             .collect();
-        let symbolic = SymbolicLlt::try_new(
-            SymbolicSparseColMatRef::new_checked(3 * vars, 3 * vars, &col_ptr, None, &row_idx),
-            Side::Upper,
-        )?;
+        let mut block_col_ptr = vec![0];
+        let mut block_row_idx = Vec::new();
+        for (v, list) in neighbours.iter().enumerate() {
+            block_row_idx.extend(list.iter().copied().chain([v]));
+            block_col_ptr.push(block_row_idx.len());
+        }
+        let solver = Solver::new(&col_ptr, &row_idx, &block_col_ptr, &block_row_idx)?;
         Ok(Some(Pattern {
             vars,
             node_of_var,
@@ -117,7 +118,7 @@ impl Pattern {
             diagonal,
             edges: slots,
             anchored: held.anchored,
-            symbolic,
+            solver,
         }))
     }
 }
