@@ -123,3 +123,24 @@ fn contradictory_edges_end_finite_with_the_odometry_kept() {
     assert_eq!(r.downweighted_loops.len(), 2);
     assert!((g.pose(NodeId(2)).unwrap().x - 2.0).abs() < 1e-3);
 }
+
+#[test]
+fn an_unchanged_graph_is_not_solved_again_but_any_change_is() {
+    let mut g = PoseGraph::new();
+    for k in 0..3 {
+        g.add_node(Pose2d::new(k as f64 * 1.2, 0.3 * k as f64, 0.0))
+            .unwrap();
+    }
+    let step = Pose2d::new(1.0, 0.0, 0.0);
+    g.add_edge(edge(0, 1, step, 0.1, EdgeKind::Odometry))
+        .unwrap();
+    g.add_edge(edge(1, 2, step, 0.1, EdgeKind::Odometry))
+        .unwrap();
+    let config = OptimizeConfig::default();
+    assert!(g.optimize(&config).iterations > 0);
+    let again = g.optimize(&config);
+    assert!(again.converged && again.iterations == 0);
+    g.set_pose(NodeId(2), Pose2d::new(5.0, 1.0, 0.0)).unwrap();
+    assert!(g.optimize(&config).iterations > 0);
+    assert!((g.pose(NodeId(2)).unwrap().x - 2.0).abs() < 1e-6);
+}

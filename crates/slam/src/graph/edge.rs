@@ -138,6 +138,18 @@ pub fn check_information(info: &Information) -> Result<(), GraphError> {
     }
 }
 
+/// An odometry edge with unit-ish information, for the module tests.
+#[cfg(test)]
+pub(super) fn test_edge(from: u32, to: u32, measurement: Pose2d) -> Edge {
+    Edge {
+        from: NodeId(from),
+        to: NodeId(to),
+        measurement,
+        information: diagonal_information(0.1, 0.01),
+        kind: EdgeKind::Odometry,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,7 +9,8 @@
 //! section 3.2). Loop edges are reweighted every iteration by the robust kernel.
 //!
 //! Warm start: the current poses are the initial guess, so after one more loop edge the solver
-//! usually needs only a few iterations; a graph already at its optimum stops after one solve.
+//! usually needs only a few iterations. A call on a graph that has not changed since its last
+//! converged optimisation (same settings) returns at once.
 
 use super::edge::{EdgeId, EdgeKind, NodeId};
 use super::graduation::{edge_kernels, stage_kernels, worst_undecided_chi2};
@@ -103,17 +104,20 @@ impl PoseGraph {
             downweighted_loops: Vec::new(),
             anchored: Vec::new(),
         };
-        if self.pattern.is_none() {
+        let unchanged = self.settled == Some(*config);
+        if self.pattern.is_none() && !unchanged {
             match Pattern::build(self.fixed_flags(), self.edges()) {
                 Ok(p) => self.pattern = p,
                 Err(_) => report.stop = StopReason::OutOfMemory,
             }
         }
-        if self.pattern.is_none() {
-            report.anchored = anchored_nodes(self.fixed_flags(), self.edges());
-        }
-        if let Some(mut pattern) = self.pattern.take() {
-            report.anchored = pattern.anchored.clone();
+        report.anchored = match &self.pattern {
+            Some(pattern) => pattern.anchored.clone(),
+            None => anchored_nodes(self.fixed_flags(), self.edges()),
+        };
+        if unchanged {
+            report.stop = StopReason::Converged;
+        } else if let Some(mut pattern) = self.pattern.take() {
             let stages = stage_kernels(self, config);
             for (k, &stage) in stages.iter().enumerate() {
                 let last = k + 1 == stages.len();
@@ -148,6 +152,7 @@ impl PoseGraph {
             .map(|(i, _)| EdgeId(i as u32))
             .collect();
         self.remember_rejected(&report.downweighted_loops);
+        self.settled = report.converged.then_some(*config);
         report.elapsed = start.elapsed();
         report
     }

@@ -172,18 +172,12 @@ fn held_nodes(fixed: &[bool], edges: &[Edge]) -> Held {
 
 #[cfg(test)]
 mod tests {
-    use super::super::edge::{diagonal_information, EdgeKind};
+    use super::super::edge::test_edge;
     use super::super::pose::Pose2d;
     use super::*;
 
     fn edge(from: u32, to: u32) -> Edge {
-        Edge {
-            from: NodeId(from),
-            to: NodeId(to),
-            measurement: Pose2d::IDENTITY,
-            information: diagonal_information(1.0, 1.0),
-            kind: EdgeKind::Odometry,
-        }
+        test_edge(from, to, Pose2d::IDENTITY)
     }
 
     #[test]
