@@ -8,7 +8,9 @@
 //! to accept every undecided loop (plain least squares for them, which has no such minima),
 //! then divides `mu` by `graduation_step` stage by stage down to 1: loops the rest of the graph
 //! agrees with settle to small errors on the way, and only those it disagrees with lose their
-//! weight.
+//! weight. A stage whose threshold is above every undecided loop's current error would solve
+//! the same problem as the stage before, so it is skipped: once the loops agree, the rest of
+//! the graduation costs nothing.
 //!
 //! Loops the previous optimisation rejected keep the final kernel throughout, so a false loop
 //! found once does not bend the map again at every later call (and does not make every call
@@ -30,14 +32,7 @@ pub(super) fn stage_kernels(graph: &PoseGraph, config: &OptimizeConfig) -> Vec<L
     let (LoopKernel::Dcs { phi }, Some(step)) = (config.loop_kernel, config.graduation_step) else {
         return vec![config.loop_kernel];
     };
-    let poses = graph.nodes();
-    let worst = (graph.edges().iter().enumerate())
-        .filter(|(k, e)| e.kind == EdgeKind::Loop && !graph.was_rejected(*k))
-        .map(|(_, e)| {
-            let lin = linearize(poses[e.from.index()], poses[e.to.index()], e.measurement);
-            chi2(&lin.error, &e.information)
-        })
-        .fold(0.0, f64::max);
+    let worst = worst_undecided_chi2(graph);
     let mut stages = vec![config.loop_kernel];
     let mut mu = 1.0;
     while phi * mu < worst && stages.len() < MAX_STAGES && step > 1.0 {
@@ -46,6 +41,19 @@ pub(super) fn stage_kernels(graph: &PoseGraph, config: &OptimizeConfig) -> Vec<L
     }
     stages.reverse();
     stages
+}
+
+/// The largest error among loops the last optimisation did not reject: a stage whose
+/// threshold is above it weights every such loop fully, like the stage before it.
+pub(super) fn worst_undecided_chi2(graph: &PoseGraph) -> f64 {
+    let poses = graph.nodes();
+    (graph.edges().iter().enumerate())
+        .filter(|(k, e)| e.kind == EdgeKind::Loop && !graph.was_rejected(*k))
+        .map(|(_, e)| {
+            let lin = linearize(poses[e.from.index()], poses[e.to.index()], e.measurement);
+            chi2(&lin.error, &e.information)
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Each edge's kernel in one stage: none for odometry, `base` for loops rejected last time,

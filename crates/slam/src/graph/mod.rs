@@ -11,6 +11,7 @@ mod pattern;
 mod pose;
 mod pose_graph;
 mod residual;
+mod solver;
 
 pub use edge::{diagonal_information, Edge, EdgeId, EdgeKind, GraphError, Information, NodeId};
 pub use g2o::{read_g2o, write_g2o, G2oError, G2oErrorKind};

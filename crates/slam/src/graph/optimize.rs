@@ -9,19 +9,17 @@
 //! section 3.2). Loop edges are reweighted every iteration by the robust kernel.
 //!
 //! Warm start: the current poses are the initial guess, so after one more loop edge the solver
-//! usually needs only a few iterations; a graph already at its optimum stops after one solve.
+//! usually needs only a few iterations. A call on a graph that has not changed since its last
+//! converged optimisation (same settings) returns at once.
 
 use super::edge::{EdgeId, EdgeKind, NodeId};
-use super::graduation::{edge_kernels, stage_kernels};
+use super::graduation::{edge_kernels, stage_kernels, worst_undecided_chi2};
 use super::kernel::LoopKernel;
-use super::pattern::Pattern;
+use super::pattern::{anchored_nodes, Pattern};
 use super::pose::Pose2d;
 use super::pose_graph::PoseGraph;
 use super::residual::{chi2, linearize, mul, mul_vec, transpose_mul};
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::Llt;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{MatMut, Side};
 use std::time::{Duration, Instant};
 
 /// Initial Marquardt damping: small, because a warm-started graph is near its optimum.
@@ -106,17 +104,28 @@ impl PoseGraph {
             downweighted_loops: Vec::new(),
             anchored: Vec::new(),
         };
-        if self.pattern.is_none() {
+        let unchanged = self.settled == Some(*config);
+        if self.pattern.is_none() && !unchanged {
             match Pattern::build(self.fixed_flags(), self.edges()) {
                 Ok(p) => self.pattern = p,
                 Err(_) => report.stop = StopReason::OutOfMemory,
             }
         }
-        if let Some(pattern) = self.pattern.take() {
-            report.anchored = pattern.anchored.clone();
+        report.anchored = match &self.pattern {
+            Some(pattern) => pattern.anchored.clone(),
+            None => anchored_nodes(self.fixed_flags(), self.edges()),
+        };
+        if unchanged {
+            report.stop = StopReason::Converged;
+        } else if let Some(mut pattern) = self.pattern.take() {
             let stages = stage_kernels(self, config);
             for (k, &stage) in stages.iter().enumerate() {
                 let last = k + 1 == stages.len();
+                if let (false, false, LoopKernel::Dcs { phi }) = (k == 0, last, stage) {
+                    if worst_undecided_chi2(self) <= phi {
+                        continue;
+                    }
+                }
                 let kernels = edge_kernels(self, stage, config.loop_kernel);
                 // Intermediate stages only need to move the poses towards the next stage's
                 // basin, not to converge: a loose tolerance and a few steps suffice.
@@ -125,7 +134,7 @@ impl PoseGraph {
                 } else {
                     (1e-3, 5)
                 };
-                let lm = self.levenberg_marquardt(&pattern, &kernels, tolerance, budget);
+                let lm = self.levenberg_marquardt(&mut pattern, &kernels, tolerance, budget);
                 report.iterations += lm.1;
                 report.stop = lm.0;
             }
@@ -143,13 +152,14 @@ impl PoseGraph {
             .map(|(i, _)| EdgeId(i as u32))
             .collect();
         self.remember_rejected(&report.downweighted_loops);
+        self.settled = report.converged.then_some(*config);
         report.elapsed = start.elapsed();
         report
     }
 
     fn levenberg_marquardt(
         &mut self,
-        pattern: &Pattern,
+        pattern: &mut Pattern,
         kernels: &[LoopKernel],
         tolerance: f64,
         max_iterations: usize,
@@ -181,17 +191,14 @@ impl PoseGraph {
                         *d += lambda * d.abs().max(1e-12);
                     }
                 }
-                let matrix = SparseColMatRef::new(symbolic, &damped);
-                let Ok(llt) =
-                    Llt::try_new_with_symbolic(pattern.symbolic.clone(), matrix, Side::Upper)
-                else {
-                    (lambda, nu) = (lambda * nu, nu * 2.0);
-                    continue;
-                };
                 for (s, g) in step.iter_mut().zip(&gradient) {
                     *s = -g;
                 }
-                llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut step, n, 1));
+                let matrix = SparseColMatRef::new(symbolic, &damped);
+                if !pattern.solver.solve(matrix, &mut step) {
+                    (lambda, nu) = (lambda * nu, nu * 2.0);
+                    continue;
+                }
                 // Decrease the damped linear model promises: -h.g + lambda h^T D h.
                 let mut predicted = 0.0;
                 for (k, (s, g)) in step.iter().zip(&gradient).enumerate() {

@@ -10,9 +10,7 @@
 //! array instead of sorting triplets every iteration.
 
 use super::edge::{Edge, NodeId};
-use faer::sparse::linalg::solvers::SymbolicLlt;
-use faer::sparse::SymbolicSparseColMatRef;
-use faer::Side;
+use super::solver::Solver;
 
 /// Where one edge adds into the Hessian's value array.
 #[derive(Clone, Copy, Debug)]
@@ -38,7 +36,7 @@ pub(super) struct Pattern {
     pub edges: Vec<EdgeSlots>,
     /// Nodes held still only because nothing joins their component to a fixed node.
     pub anchored: Vec<NodeId>,
-    pub symbolic: SymbolicLlt<usize>,
+    pub solver: Solver,
 }
 
 impl Pattern {
@@ -51,9 +49,9 @@ impl Pattern {
         let held = held_nodes(fixed, edges);
         let mut var_of_node = vec![None; n];
         let mut node_of_var = Vec::new();
-        for node in 0..n {
+        for (node, var) in var_of_node.iter_mut().enumerate() {
             if !held.held[node] {
-                var_of_node[node] = Some(node_of_var.len());
+                *var = Some(node_of_var.len());
                 node_of_var.push(node);
             }
         }
@@ -105,10 +103,13 @@ impl Pattern {
                 }
             })
             .collect();
-        let symbolic = SymbolicLlt::try_new(
-            SymbolicSparseColMatRef::new_checked(3 * vars, 3 * vars, &col_ptr, None, &row_idx),
-            Side::Upper,
-        )?;
+        let mut block_col_ptr = vec![0];
+        let mut block_row_idx = Vec::new();
+        for (v, list) in neighbours.iter().enumerate() {
+            block_row_idx.extend(list.iter().copied().chain([v]));
+            block_col_ptr.push(block_row_idx.len());
+        }
+        let solver = Solver::new(&col_ptr, &row_idx, &block_col_ptr, &block_row_idx)?;
         Ok(Some(Pattern {
             vars,
             node_of_var,
@@ -117,9 +118,14 @@ impl Pattern {
             diagonal,
             edges: slots,
             anchored: held.anchored,
-            symbolic,
+            solver,
         }))
     }
+}
+
+/// Nodes held only for the gauge (see [`held_nodes`]).
+pub(super) fn anchored_nodes(fixed: &[bool], edges: &[Edge]) -> Vec<NodeId> {
+    held_nodes(fixed, edges).anchored
 }
 
 struct Held {
@@ -166,18 +172,12 @@ fn held_nodes(fixed: &[bool], edges: &[Edge]) -> Held {
 
 #[cfg(test)]
 mod tests {
-    use super::super::edge::{diagonal_information, EdgeKind};
+    use super::super::edge::test_edge;
     use super::super::pose::Pose2d;
     use super::*;
 
     fn edge(from: u32, to: u32) -> Edge {
-        Edge {
-            from: NodeId(from),
-            to: NodeId(to),
-            measurement: Pose2d::IDENTITY,
-            information: diagonal_information(1.0, 1.0),
-            kind: EdgeKind::Odometry,
-        }
+        test_edge(from, to, Pose2d::IDENTITY)
     }
 
     #[test]

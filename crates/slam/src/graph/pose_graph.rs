@@ -22,6 +22,9 @@ pub struct PoseGraph {
     /// Loop edges the last optimisation down-weighted, indexed like `edges`; they skip the
     /// graduated start of the next one (see `super::graduation`).
     rejected: Vec<bool>,
+    /// The settings of the last optimisation if it converged and no edge, pose or fixed flag
+    /// has changed since: optimising again with them would find the same poses.
+    pub(super) settled: Option<super::optimize::OptimizeConfig>,
 }
 
 impl PoseGraph {
@@ -62,6 +65,7 @@ impl PoseGraph {
             ..edge
         });
         self.pattern = None;
+        self.settled = None;
         Ok(EdgeId(id))
     }
 
@@ -76,6 +80,7 @@ impl PoseGraph {
             return Err(GraphError::NonFinitePose { what: "node pose" });
         }
         self.poses[id.index()] = Pose2d::new(pose.x, pose.y, pose.theta);
+        self.settled = None;
         Ok(())
     }
 
@@ -85,6 +90,7 @@ impl PoseGraph {
         if !self.fixed[id.index()] {
             self.fixed[id.index()] = true;
             self.pattern = None;
+            self.settled = None;
         }
         Ok(())
     }
@@ -136,17 +142,11 @@ impl PoseGraph {
 
 #[cfg(test)]
 mod tests {
-    use super::super::edge::{diagonal_information, EdgeKind};
+    use super::super::edge::test_edge;
     use super::*;
 
     fn edge(from: u32, to: u32) -> Edge {
-        Edge {
-            from: NodeId(from),
-            to: NodeId(to),
-            measurement: Pose2d::new(1.0, 0.0, 0.0),
-            information: diagonal_information(0.1, 0.01),
-            kind: EdgeKind::Odometry,
-        }
+        test_edge(from, to, Pose2d::new(1.0, 0.0, 0.0))
     }
 
     #[test]

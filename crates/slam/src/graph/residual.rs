@@ -118,8 +118,8 @@ mod tests {
                 linearize(f, t, z).error
             };
             let (plus, minus) = (step(1.0), step(-1.0));
-            for r in 0..3 {
-                out[r][k] = normalize_angle_f64(plus[r] - minus[r]) / (2.0 * h);
+            for (r, row) in out.iter_mut().enumerate() {
+                row[k] = normalize_angle_f64(plus[r] - minus[r]) / (2.0 * h);
             }
         }
         out
