@@ -18,7 +18,7 @@ pub struct BackendStats {
     pub loops_accepted: usize,
     pub loops_rejected: usize,
     /// Rejected loop candidates by [`crate::loops::Rejection`] reason.
-    pub rejections: [usize; 7],
+    pub rejections: [usize; 8],
     pub optimisations: usize,
     /// Accepted loops that the graph's robust kernel ignores after the last optimisation.
     pub loops_downweighted: usize,

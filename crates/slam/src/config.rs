@@ -1,6 +1,6 @@
 //! Every tunable of the SLAM front end in one place, with units and the reason for each default.
 
-use crate::correlative::CorrelativeConfig;
+use crate::correlative::{CorrelativeConfig, Rival};
 use plumbline_core::matching::local_map::{LineMapConfig, RefineConfig};
 use plumbline_core::matching::{MatchConfig, OdometryConfig};
 
@@ -85,6 +85,9 @@ pub struct LoopConfig {
     pub window_rad_per_m: f32,
     pub window_max_rad: f32,
     pub min_score: f32,
+    /// A rival pose away from the best that scores almost as well makes the candidate
+    /// ambiguous: a row of alike rooms or doors fits the scan in two places.
+    pub rival: Rival,
     /// Verification: the match must pair at least this fraction of the keyframe's points…
     pub min_inlier_ratio: f32,
     /// …with an RMS point-to-line residual at most this, m…
@@ -122,6 +125,11 @@ impl Default for LoopConfig {
             window_rad_per_m: 0.005,
             window_max_rad: 0.35,
             min_score: 0.3,
+            rival: Rival {
+                exclude_m: 0.5,
+                exclude_rad: 0.2,
+                ratio: 0.9,
+            },
             // The coarse search has already found the basin; the matcher's own recovery
             // would only search again.
             matcher: MatchConfig {

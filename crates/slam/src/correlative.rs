@@ -153,6 +153,45 @@ impl LookupGrid {
         min_score: f32,
         config: &CorrelativeConfig,
     ) -> Option<Found> {
+        let layout = self.layout(points, guess, window, config)?;
+        let threshold = (min_score * layout.norm) as u32;
+        let best = self.run(&layout, threshold, None)?;
+        Some(layout.found(self, best, guess))
+    }
+
+    /// The score of the best pose at least `exclude_m` or `exclude_rad` away from `winner` (a
+    /// [`Self::search`] answer with the same arguments) that reaches `ratio` of its score, if
+    /// one does: a second place almost as good means the scan fits two places (a row of alike
+    /// rooms), and the winner may be the wrong one.
+    pub fn rival(
+        &self,
+        points: &[Vec2],
+        guess: Pose2,
+        window: Window,
+        winner: &Found,
+        rival: Rival,
+        config: &CorrelativeConfig,
+    ) -> Option<f32> {
+        let layout = self.layout(points, guess, window, config)?;
+        let around = layout.candidate_of(self, winner.pose, guess);
+        let exclusion = Exclusion {
+            around,
+            cells: (rival.exclude_m / self.resolution).ceil() as i32,
+            headings: (rival.exclude_rad / layout.heading_step).ceil() as i32,
+        };
+        let floor = (winner.score * rival.ratio * layout.norm) as u32;
+        self.run(&layout, floor, Some(exclusion))
+            .map(|c| c.bound as f32 / layout.norm)
+    }
+
+    /// The scored points' cells for every heading of the window.
+    fn layout(
+        &self,
+        points: &[Vec2],
+        guess: Pose2,
+        window: Window,
+        config: &CorrelativeConfig,
+    ) -> Option<Layout> {
         let scored = self.scored_points(points, config);
         if scored.is_empty() {
             return None;
@@ -166,21 +205,9 @@ impl LookupGrid {
         let cos_step = 1.0 - self.resolution * self.resolution / (2.0 * reach * reach);
         let heading_step = cos_step.clamp(-1.0, 1.0).acos().max(1e-4);
         let headings = (window.heading_rad / heading_step).ceil() as i32;
-        let half = (window.translation_m / self.resolution).ceil() as i32;
-        let top = self.levels.len() - 1;
-        let top_step = 1i32 << top;
-        let norm = 255.0 * scored.len() as f32;
-        let threshold = (min_score * norm) as u32;
-        let mut search = Search {
-            grid: self,
-            best: (threshold, None),
-        };
-        let mut roots: Vec<Candidate> = Vec::new();
-        let mut cells: Vec<Vec<(i32, i32)>> = Vec::with_capacity((2 * headings + 1) as usize);
-        for h in -headings..=headings {
-            let theta = guess.theta + h as f32 * heading_step;
-            let rotation = Pose2::new(guess.x, guess.y, theta);
-            cells.push(
+        let cells = (-headings..=headings)
+            .map(|h| {
+                let rotation = Pose2::new(guess.x, guess.y, guess.theta + h as f32 * heading_step);
                 scored
                     .iter()
                     .map(|&p| {
@@ -190,17 +217,38 @@ impl LookupGrid {
                             ((q.y - self.origin.y) / self.resolution).floor() as i32,
                         )
                     })
-                    .collect(),
-            );
-            let index = cells.len() - 1;
+                    .collect()
+            })
+            .collect();
+        Some(Layout {
+            cells,
+            headings,
+            heading_step,
+            half: (window.translation_m / self.resolution).ceil() as i32,
+            norm: 255.0 * scored.len() as f32,
+        })
+    }
+
+    /// Branch and bound over the layout: the best leaf above `threshold`, outside `exclusion`.
+    fn run(
+        &self,
+        layout: &Layout,
+        threshold: u32,
+        exclusion: Option<Exclusion>,
+    ) -> Option<Candidate> {
+        let top = self.levels.len() - 1;
+        let top_step = 1i32 << top;
+        let half = layout.half;
+        let mut roots: Vec<Candidate> = Vec::new();
+        for (heading, cells) in layout.cells.iter().enumerate() {
             let mut ix = -half;
             while ix <= half {
                 let mut iy = -half;
                 while iy <= half {
-                    let bound = self.score(&cells[index], top, ix, iy);
+                    let bound = self.score(cells, top, ix, iy);
                     if bound > threshold {
                         roots.push(Candidate {
-                            heading: index,
+                            heading,
                             ix,
                             iy,
                             level: top,
@@ -213,20 +261,15 @@ impl LookupGrid {
             }
         }
         roots.sort_by_key(|c| std::cmp::Reverse(c.bound));
+        let mut search = Search {
+            grid: self,
+            best: (threshold, None),
+            exclusion,
+        };
         for root in roots {
-            search.expand(&cells, root, half);
+            search.expand(&layout.cells, root, half);
         }
-        let (score, best) = search.best;
-        let best = best?;
-        let theta = guess.theta + (best.heading as i32 - headings) as f32 * heading_step;
-        Some(Found {
-            pose: Pose2::new(
-                guess.x + best.ix as f32 * self.resolution,
-                guess.y + best.iy as f32 * self.resolution,
-                plumbline_core::geom::normalize_angle(theta),
-            ),
-            score: score as f32 / norm,
-        })
+        search.best.1
     }
 
     /// Mean likelihood of `points` placed at `pose` on the fine grid, 0 to 1.
@@ -268,6 +311,67 @@ impl LookupGrid {
     }
 }
 
+/// How a rival to the winner is looked for ([`LookupGrid::search_with_rival`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rival {
+    /// Poses within this distance and this turn of the winner are the winner's own peak.
+    pub exclude_m: f32,
+    pub exclude_rad: f32,
+    /// A rival counts from this fraction of the winner's score.
+    pub ratio: f32,
+}
+
+/// The scored points' cells per heading, and what turns a candidate back into a pose.
+struct Layout {
+    cells: Vec<Vec<(i32, i32)>>,
+    headings: i32,
+    heading_step: f32,
+    half: i32,
+    norm: f32,
+}
+
+impl Layout {
+    /// The leaf of `pose` (an answer of this layout).
+    fn candidate_of(&self, grid: &LookupGrid, pose: Pose2, guess: Pose2) -> Candidate {
+        let turn = plumbline_core::geom::normalize_angle(pose.theta - guess.theta);
+        Candidate {
+            heading: ((turn / self.heading_step).round() as i32 + self.headings).max(0) as usize,
+            ix: ((pose.x - guess.x) / grid.resolution).round() as i32,
+            iy: ((pose.y - guess.y) / grid.resolution).round() as i32,
+            level: 0,
+            bound: 0,
+        }
+    }
+
+    fn found(&self, grid: &LookupGrid, best: Candidate, guess: Pose2) -> Found {
+        let theta = guess.theta + (best.heading as i32 - self.headings) as f32 * self.heading_step;
+        Found {
+            pose: Pose2::new(
+                guess.x + best.ix as f32 * grid.resolution,
+                guess.y + best.iy as f32 * grid.resolution,
+                plumbline_core::geom::normalize_angle(theta),
+            ),
+            score: best.bound as f32 / self.norm,
+        }
+    }
+}
+
+/// Leaves this close to a winner are not rivals.
+#[derive(Clone, Copy, Debug)]
+struct Exclusion {
+    around: Candidate,
+    cells: i32,
+    headings: i32,
+}
+
+impl Exclusion {
+    fn contains(&self, c: &Candidate) -> bool {
+        (c.ix - self.around.ix).abs() <= self.cells
+            && (c.iy - self.around.iy).abs() <= self.cells
+            && (c.heading as i32 - self.around.heading as i32).abs() <= self.headings
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Candidate {
     heading: usize,
@@ -281,6 +385,7 @@ struct Search<'g> {
     grid: &'g LookupGrid,
     /// Best complete score so far (starts at the acceptance threshold) and its candidate.
     best: (u32, Option<Candidate>),
+    exclusion: Option<Exclusion>,
 }
 
 impl Search<'_> {
@@ -290,7 +395,9 @@ impl Search<'_> {
             return;
         }
         if c.level == 0 {
-            self.best = (c.bound, Some(c));
+            if !self.exclusion.is_some_and(|e| e.contains(&c)) {
+                self.best = (c.bound, Some(c));
+            }
             return;
         }
         let level = c.level - 1;

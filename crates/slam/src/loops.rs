@@ -39,6 +39,8 @@ pub enum Rejection {
     TooFarFromGuess,
     /// The scans constrain one direction too weakly (a corridor).
     Degenerate,
+    /// Another pose in the window, away from the best, fits almost as well (alike rooms).
+    Ambiguous,
 }
 
 pub struct LoopCloser<const N: usize> {
@@ -112,7 +114,7 @@ impl<const N: usize> LoopCloser<N> {
     ) -> Result<LoopEdge, Rejection> {
         let cfg = &self.config;
         let coarse = self.coarse_search(keyframes, poses, from, to, guess)?;
-        let guess = coarse.pose;
+        let guess = coarse.found.pose;
         keyframes[from].to_scan(&mut self.reference);
         keyframes[to].to_scan(&mut self.current);
         self.matcher
@@ -137,16 +139,28 @@ impl<const N: usize> LoopCloser<N> {
         if q.degenerate_direction.is_some() || q.conditioning < cfg.min_conditioning {
             return Err(Rejection::Degenerate);
         }
-        let (shift, turn) = coarse.pose.distance_to(result.motion);
+        let (shift, turn) = coarse.found.pose.distance_to(result.motion);
         if shift > cfg.max_correction_m || turn > cfg.max_correction_rad {
             return Err(Rejection::TooFarFromGuess);
+        }
+        // Last, being the dearest check: does the scan fit another place almost as well?
+        let rival = coarse.grid.rival(
+            &coarse.current,
+            coarse.guess,
+            coarse.window,
+            &coarse.found,
+            cfg.rival,
+            &cfg.correlative,
+        );
+        if rival.is_some() {
+            return Err(Rejection::Ambiguous);
         }
         Ok(LoopEdge {
             from,
             to,
             measurement: result.motion,
             result,
-            score: coarse.score,
+            score: coarse.found.score,
         })
     }
 
@@ -159,7 +173,7 @@ impl<const N: usize> LoopCloser<N> {
         from: usize,
         to: usize,
         guess: Pose2,
-    ) -> Result<Found, Rejection> {
+    ) -> Result<Coarse, Rejection> {
         let cfg = &self.config;
         let first = from.saturating_sub(cfg.reference_neighbours);
         let last = (from + cfg.reference_neighbours).min(to.saturating_sub(1));
@@ -185,9 +199,26 @@ impl<const N: usize> LoopCloser<N> {
             p.x >= lo.x - reach && p.x <= hi.x + reach && p.y >= lo.y - reach && p.y <= hi.y + reach
         });
         let grid = LookupGrid::new(&reference, 0.5, &cfg.correlative, 5);
-        grid.search(&current, guess, window, cfg.min_score, &cfg.correlative)
-            .ok_or(Rejection::NoCoarseFit)
+        let found = grid
+            .search(&current, guess, window, cfg.min_score, &cfg.correlative)
+            .ok_or(Rejection::NoCoarseFit)?;
+        Ok(Coarse {
+            grid,
+            current,
+            guess,
+            window,
+            found,
+        })
     }
+}
+
+/// A coarse search's answer, with what a rival search needs to repeat it.
+struct Coarse {
+    grid: LookupGrid,
+    current: Vec<Vec2>,
+    guess: Pose2,
+    window: Window,
+    found: Found,
 }
 
 /// Lower-left and upper-right corners of the points' bounding box.
