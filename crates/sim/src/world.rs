@@ -3,7 +3,6 @@
 //! `crates/sim/WORLDS.md`; the shipped worlds live in `crates/sim/worlds/`.
 
 use crate::math::Vec3;
-use crate::occupancy::Occupancy;
 
 /// A wall from `a` to `b` (world x, y in metres), floor to ceiling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -247,27 +246,6 @@ impl World {
             return Err(whole("altitude must lie between floor and ceiling"));
         }
         Ok(w)
-    }
-
-    /// A world whose walls outline an occupancy grid's occupied cells.
-    pub fn from_occupancy(
-        name: &str,
-        grid: &Occupancy,
-        start: [f64; 3],
-        path: Vec<[f64; 2]>,
-        altitude_m: f64,
-        ceiling_m: f64,
-    ) -> World {
-        World {
-            name: name.into(),
-            ceiling_m,
-            start,
-            walls: grid.walls(),
-            blocks: Vec::new(),
-            path,
-            altitude_m,
-            walkers: Vec::new(),
-        }
     }
 
     /// The world in the line format of `WORLDS.md` (walls as `wall` lines; blocks become plain
