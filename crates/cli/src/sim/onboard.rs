@@ -6,7 +6,7 @@ use crate::report::CliError;
 use clap::Args;
 use plotters::prelude::*;
 use plumbline_core::msgs::{FailsafeReason, FlightMode};
-use plumbline_sim::onboard_link::FlightLog;
+use plumbline_sim::runner::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
 use plumbline_sim::scenario::score::OnboardScore;
 use plumbline_sim::scenario::{Controller, Options, Tuning};

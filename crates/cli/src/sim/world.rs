@@ -4,8 +4,8 @@
 use crate::report::CliError;
 use plumbline_io::carmen::CarmenLog;
 use plumbline_io::output;
-use plumbline_sim::occupancy::Occupancy;
-use plumbline_sim::scene::Scene;
+use plumbline_sim::world::occupancy::Occupancy;
+use plumbline_sim::world::scene::Scene;
 use plumbline_sim::world::World;
 use std::path::Path;
 

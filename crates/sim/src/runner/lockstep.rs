@@ -11,19 +11,19 @@ use super::{
     Outcome, Pilot, Recorder, SensorFrame, SetupError, SimConfig, StateSample, Status, TruthPose,
     CLEARANCE_CAP_M, STATE_RATE_HZ,
 };
-use crate::battery::{Battery, BatteryLevel};
-use crate::clearance::ClearanceWatch;
 use crate::disturb::{push_force, Gusts};
-use crate::dynamics::{BodyState, Dynamics, Forcing};
 use crate::math::{Quat, Vec3};
-use crate::pilot::TestPilot;
-use crate::power::{power, EnergyTally};
 use crate::rng::Rng;
-use crate::scene::{Cylinder, Scene};
+use crate::runner::pilot::TestPilot;
 use crate::sensors::imu::Imu;
 use crate::sensors::lidar::{Lidar, LidarScan, SensorPose};
 use crate::sensors::sonar::Sonar;
+use crate::vehicle::battery::{Battery, BatteryLevel};
+use crate::vehicle::dynamics::{BodyState, Dynamics, Forcing};
+use crate::vehicle::power::{power, EnergyTally};
 use crate::vehicle::GRAVITY;
+use crate::world::clearance::ClearanceWatch;
+use crate::world::scene::{Cylinder, Scene};
 use crate::world::Walker;
 use plumbline_core::msgs::{BatterySample, ImuSample, SonarSample};
 

@@ -1,24 +1,32 @@
+//! The run: the lockstep runner (this module and `lockstep`), who flies ([`pilot`], the
+//! ground-truth test pilot, flying a [`plan`]; or the onboard stack through [`onboard_link`]),
+//! and the ground-truth relations between scans ([`truth`]).
+//!
 //! The lockstep runner: one fixed physics step at a time (default 1 kHz), sensors sampled at
 //! their own rates inside it, and the flight software called at its own rate through one step
 //! interface (DESIGN.md §1). Everything random draws from streams forked from one seed, and
 //! nothing reads a clock, so a run is reproducible bit for bit.
 //!
-//! [`run`] is the loop; one step of it is [`lockstep`]'s, with the run's state between steps.
+//! [`run`] is the loop; one step of it is `lockstep`'s, with the run's state between steps.
 
 use crate::disturb::{GustParams, Push};
 use crate::math::{Quat, Vec3};
-use crate::pilot::TestPilot;
-use crate::plan::Plan;
-use crate::power::EnergyTally;
+use crate::runner::pilot::TestPilot;
+use crate::runner::plan::Plan;
 use crate::sensors::imu::ImuParams;
 use crate::sensors::lidar::{LidarProfile, LidarScan};
 use crate::sensors::sonar::SonarParams;
+use crate::vehicle::power::EnergyTally;
 use crate::vehicle::VehicleParams;
 use crate::world::{World, WorldError};
 use lockstep::Lockstep;
 use plumbline_core::msgs::{BatterySample, ImuSample, MotorCommands, SonarSample};
 
 mod lockstep;
+pub mod onboard_link;
+pub mod pilot;
+pub mod plan;
+pub mod truth;
 
 /// Everything a run needs.
 #[derive(Clone, Debug)]
@@ -135,7 +143,7 @@ pub trait FlightSoftware {
 
 /// Who flies.
 pub enum Pilot {
-    /// The ground-truth test pilot flying a scripted plan (simulator-only, see [`crate::pilot`]).
+    /// The ground-truth test pilot flying a scripted plan (simulator-only, see [`crate::runner::pilot`]).
     Test(Plan),
     /// Onboard code; the run lasts `SimConfig::max_duration_s`.
     Onboard(Box<dyn FlightSoftware>),
@@ -194,7 +202,7 @@ impl std::error::Error for SetupError {}
 pub const CLEARANCE_CAP_M: f64 = 2.0;
 
 /// Flies one run to the end and reports it: the lockstep loop of physics, sensors and pilot
-/// (see [`Lockstep::step`]) until the flight's end or the first crash.
+/// (see `Lockstep::step`) until the flight's end or the first crash.
 pub fn run(
     config: &SimConfig,
     pilot: Pilot,

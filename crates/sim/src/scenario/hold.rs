@@ -7,8 +7,8 @@ use super::onboard::{self, ARM_AT_S};
 use super::{Controller, Entry, Flight, Options, ScenarioError};
 use crate::disturb::Push;
 use crate::math::Vec3;
-use crate::onboard_link::Script;
-use crate::plan::{Plan, PlanLimits};
+use crate::runner::onboard_link::Script;
+use crate::runner::plan::{Plan, PlanLimits};
 use crate::runner::SimConfig;
 
 pub(super) const ENTRY: Entry = Entry {

@@ -3,7 +3,7 @@
 
 use super::onboard::{self, ARM_AT_S};
 use super::{Entry, Flight, Options, ScenarioError};
-use crate::onboard_link::Script;
+use crate::runner::onboard_link::Script;
 use crate::runner::SimConfig;
 
 pub(super) const ENTRY: Entry = Entry {

@@ -15,7 +15,7 @@
 //! Adding a scenario is one new file and one catalogue entry: write `scenario/NAME.rs` with a
 //! `pub(super) const ENTRY: Entry` whose `prepare` adjusts the [`SimConfig`] and returns the
 //! [`Flight`] (the test pilot with a [`Plan`], or the onboard stack through
-//! [`onboard::flight`]), then add `NAME::ENTRY` to [`CATALOGUE`]. Scoring needs no new code
+//! `onboard::flight`), then add `NAME::ENTRY` to [`CATALOGUE`]. Scoring needs no new code
 //! unless the scenario judges something new: then it goes in [`score`], next to the rest.
 
 pub mod hold;
@@ -26,8 +26,8 @@ pub mod score;
 pub mod survey;
 
 use crate::disturb::Push;
-use crate::onboard_link::FlightLog;
-use crate::plan::Plan;
+use crate::runner::onboard_link::FlightLog;
+use crate::runner::plan::Plan;
 use crate::runner::{self, Outcome, Pilot, Recorder, SetupError, SimConfig};
 use crate::world::WorldError;
 use score::{Judge, Score};

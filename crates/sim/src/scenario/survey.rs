@@ -3,7 +3,7 @@
 //! inputs.
 
 use super::{Controller, Entry, Flight, Options, ScenarioError};
-use crate::plan::{Plan, PlanLimits};
+use crate::runner::plan::{Plan, PlanLimits};
 use crate::runner::SimConfig;
 use crate::world::WorldError;
 
