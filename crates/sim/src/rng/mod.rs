@@ -63,7 +63,18 @@ impl Rng {
     /// Standard normal.
     #[inline]
     pub fn gauss(&mut self) -> f64 {
-        crate::rng::ziggurat::standard_normal(self)
+        ziggurat::standard_normal(self)
+    }
+}
+
+impl ziggurat::UniformSource for Rng {
+    #[inline]
+    fn next_u64(&mut self) -> u64 {
+        Rng::next_u64(self)
+    }
+    #[inline]
+    fn uniform(&mut self) -> f64 {
+        Rng::uniform(self)
     }
 }
 

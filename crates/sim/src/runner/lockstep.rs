@@ -7,10 +7,11 @@
 //! (inlining saves about 120 M of the office survey's 718 M instructions, BENCHMARKS.md
 //! "Simulator").
 
-use super::{
-    Outcome, Pilot, Recorder, SensorFrame, SetupError, SimConfig, StateSample, Status, TruthPose,
-    CLEARANCE_CAP_M, STATE_RATE_HZ,
+use super::config::{SetupError, SimConfig};
+use super::report::{
+    Outcome, Recorder, StateSample, Status, TruthPose, CLEARANCE_CAP_M, STATE_RATE_HZ,
 };
+use super::software::{Pilot, SensorFrame};
 use crate::disturb::{push_force, Gusts};
 use crate::math::{Quat, Vec3};
 use crate::rng::Rng;

@@ -2,7 +2,7 @@
 //! for the vehicle and the lidar (through [`OnboardLink`]), the PID tuning and matcher options,
 //! the run length and the pilot who arms it.
 
-use super::{Controller, Flight, Options, ScenarioError, Tuning};
+use super::flight::{Controller, Flight, Options, ScenarioError, Tuning};
 use crate::disturb::Push;
 use crate::runner::onboard_link::{
     autopilot_for, OnboardLink, Script, LARGE_SCAN_BEAMS, XV11_BEAMS,
