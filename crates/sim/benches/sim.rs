@@ -1,4 +1,4 @@
-//! Simulator speed (issue 3 targets): the real-time factor of the office survey with the XV-11
+//! Simulator speed: the real-time factor of the office survey with the XV-11
 //! at 1 kHz physics, and ray casting against a 200-wall world.
 //!
 //! Criterion reports throughput: for `survey` the elements are physics steps (1 ms each), so the

@@ -30,7 +30,7 @@ const SECTORS: usize = 64;
 const MAX_WALLS: usize = 400;
 /// Above this many walls per sector on average the grid is used instead: a long beam then
 /// passes more listed walls before its hit than grid cells (200 walls within 30 m: 9 per
-/// sector, and the grid walk was about twice as fast).
+/// sector, and the grid walk is about twice as fast).
 const MAX_PER_SECTOR: usize = 4;
 /// Angular padding for the rounding of `atan2`, `sin` and `cos`, rad.
 const PAD_RAD: f64 = 1e-9;
