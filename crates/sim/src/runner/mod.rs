@@ -33,9 +33,9 @@ pub fn run(
     pilot: Pilot,
     recorder: &mut dyn Recorder,
 ) -> Result<Outcome, SetupError> {
-    let (mut sim, mut body) = Lockstep::new(config, pilot)?;
+    let (mut sim, dynamics, mut body) = Lockstep::new(config, pilot)?;
     while sim.running() {
-        if let Err(end) = sim.step(&mut body, recorder) {
+        if let Err(end) = sim.step(&dynamics, &mut body, recorder) {
             return Ok(sim.finish(end));
         }
     }
