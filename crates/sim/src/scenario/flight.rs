@@ -52,7 +52,7 @@ pub enum Tuning {
 }
 
 /// How to fly a scenario; plain values, whatever front end chose them.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Options {
     /// `None`: the scenario's own choice (the onboard PID stack, or the test pilot for the
     /// survey).
@@ -64,12 +64,14 @@ pub struct Options {
     pub duration_s: Option<f64>,
 }
 
-impl Options {
+impl Default for Options {
     /// The scenario's own controller, default tuning, rejection on, default length.
-    pub fn new() -> Self {
+    fn default() -> Self {
         Self {
+            controller: None,
+            tuning: Tuning::default(),
             dynamic_rejection: true,
-            ..Self::default()
+            duration_s: None,
         }
     }
 }

@@ -31,7 +31,7 @@ pub mod survey;
 pub use flight::{fly, Controller, Entry, Flight, Options, Report, ScenarioError, Tuning};
 
 /// Every scenario, as named on the command line.
-pub const CATALOGUE: [Entry; 5] = [
+pub static CATALOGUE: [Entry; 5] = [
     survey::ENTRY,
     hold::ENTRY,
     hold::WITH_PEOPLE,
