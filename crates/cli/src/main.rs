@@ -8,10 +8,7 @@ mod log_args;
 mod odometry_cmd;
 mod plot;
 mod report;
-mod sim_closed_loop;
-mod sim_cmd;
-mod sim_plot;
-mod sim_world;
+mod sim;
 mod slam_cmd;
 
 #[derive(Parser)]
@@ -36,7 +33,7 @@ enum Command {
     /// Lidar devices: decode raw captures, record from a serial port, plot a revolution.
     Lidar(lidar_cmd::LidarArgs),
     /// Fly the simulator: emulated lidar/IMU/sonar logs with exact ground truth.
-    Sim(sim_cmd::SimArgs),
+    Sim(sim::SimArgs),
 }
 
 fn main() -> ExitCode {
@@ -46,7 +43,7 @@ fn main() -> ExitCode {
         Command::Slam(args) => slam_cmd::run(args),
         Command::Eval(args) => eval_cmd::run(args),
         Command::Lidar(args) => lidar_cmd::run(args),
-        Command::Sim(args) => sim_cmd::run(args),
+        Command::Sim(args) => sim::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

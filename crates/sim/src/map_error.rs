@@ -3,7 +3,7 @@
 //! map is scored against the truth; the map frame is tied to the world by the true pose of the
 //! vehicle when the map started (SLAM's map frame is its first scan's pose).
 
-use crate::scene::Scene;
+use crate::world::scene::Scene;
 use crate::world::World;
 use plumbline_slam::grid::OccupancyGrid;
 

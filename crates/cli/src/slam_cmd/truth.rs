@@ -1,7 +1,7 @@
 //! Scoring a map against the simulated world it was made in.
 
 use crate::report::CliError;
-use crate::sim_cmd::load_world;
+use crate::sim::load_world;
 use plumbline_io::carmen::LaserRecord;
 use plumbline_io::trajectory::read_trajectory;
 use plumbline_sim::map_error::{grid_map_error, MapError};
