@@ -5,7 +5,7 @@
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::scan::Beam;
 use plumbline_sim::map_error::{grid_map_error, MapError};
-use plumbline_sim::plan::{Plan, PlanLimits};
+use plumbline_sim::runner::plan::{Plan, PlanLimits};
 use plumbline_sim::runner::{run, Pilot, Recorder, SimConfig, Status, TruthPose};
 use plumbline_sim::sensors::lidar::{LidarProfile, LidarScan};
 use plumbline_sim::world::World;
