@@ -1,5 +1,6 @@
 //! `plumbline eval TRAJ RELATIONS`: the relations metric (DESIGN.md §6).
 
+use crate::numeric::{within, Range};
 use crate::report::{print_summary, CliError, CliResult};
 use clap::Args;
 use plumbline_io::eval::{evaluate, DEFAULT_TIME_TOLERANCE_S, LOW_MATCH_RATIO};
@@ -15,7 +16,9 @@ pub struct EvalArgs {
     /// Relations, `t1 t2 x y z roll pitch yaw` per line.
     pub relations: PathBuf,
     /// Largest difference between a relation stamp and a trajectory stamp that still matches, s.
-    #[arg(long, default_value_t = DEFAULT_TIME_TOLERANCE_S)]
+    /// Valid range: [0, 1].
+    #[arg(long, default_value_t = DEFAULT_TIME_TOLERANCE_S,
+          value_parser = within::<f64>(Range::closed(0.0, 1.0)))]
     pub tolerance: f64,
     /// Print the summary as one JSON object.
     #[arg(long)]

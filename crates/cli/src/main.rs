@@ -5,6 +5,7 @@ use std::process::ExitCode;
 mod lidar_cmd;
 mod eval_cmd;
 mod log_args;
+mod numeric;
 mod odometry_cmd;
 mod plot;
 mod report;

@@ -1,6 +1,7 @@
 //! `plumbline odometry LOG`: lidar-only scan-to-scan odometry over a log (DESIGN.md §4).
 
 use crate::log_args::LogArgs;
+use crate::numeric::{within, Range};
 use crate::plot::plot_trajectory;
 use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::Args;
@@ -38,11 +39,13 @@ pub struct OdometryArgs {
     /// Draw the trajectory over the scan points into this PNG.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// New keyframe after this much travel, m.
-    #[arg(long, default_value_t = OdometryConfig::default().keyframe_distance_m)]
+    /// New keyframe after this much travel, m. Valid range: (0, 10].
+    #[arg(long, default_value_t = OdometryConfig::default().keyframe_distance_m,
+          value_parser = within::<f32>(Range::above(0.0, 10.0)))]
     pub keyframe_distance: f32,
-    /// New keyframe after this much turning, degrees.
-    #[arg(long, default_value_t = OdometryConfig::default().keyframe_angle_rad.to_degrees())]
+    /// New keyframe after this much turning, degrees. Valid range: (0, 180].
+    #[arg(long, default_value_t = OdometryConfig::default().keyframe_angle_rad.to_degrees(),
+          value_parser = within::<f32>(Range::above(0.0, 180.0)))]
     pub keyframe_angle_deg: f32,
     /// Do not align keyframes with the local map of the walls seen so far: plain
     /// scan-to-keyframe odometry, which drifts more (BENCHMARKS.md).
@@ -52,14 +55,17 @@ pub struct OdometryArgs {
     /// (what takes the drift out at the end of a loop).
     #[arg(long)]
     pub no_relocalize: bool,
-    /// Local map cell edge, m.
-    #[arg(long, default_value_t = LineMapConfig::default().cell_m)]
+    /// Local map cell edge, m. Valid range: [0.01, 10].
+    #[arg(long, default_value_t = LineMapConfig::default().cell_m,
+          value_parser = within::<f32>(Range::closed(0.01, 10.0)))]
     pub map_cell: f32,
     /// Local map width, m (rounded to whole cells; the map rolls along with the vehicle).
-    #[arg(long, default_value_t = 64.0)]
+    /// Valid range: (0, 10000], and at most 2048 cells a side.
+    #[arg(long, default_value_t = 64.0, value_parser = within::<f32>(Range::above(0.0, 10000.0)))]
     pub map_size: f32,
-    /// Weight of the scan match against the map when aligning a keyframe.
-    #[arg(long, default_value_t = RefineConfig::default().matcher_weight)]
+    /// Weight of the scan match against the map when aligning a keyframe. Valid range: [0, 100].
+    #[arg(long, default_value_t = RefineConfig::default().matcher_weight,
+          value_parser = within::<f32>(Range::closed(0.0, 100.0)))]
     pub map_matcher_weight: f32,
     #[command(flatten)]
     pub log_args: LogArgs,
@@ -88,7 +94,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
     };
     let use_map = !args.no_local_map;
     let side = if use_map {
-        map_side(args.map_size, args.map_cell, args.map_matcher_weight)?
+        map_side(args.map_size, args.map_cell)?
     } else {
         0
     };
@@ -204,24 +210,15 @@ pub fn run(args: OdometryArgs) -> CliResult {
     Ok(())
 }
 
-/// Cells per side of the local map, after checking the map options make sense.
-fn map_side(size_m: f32, cell_m: f32, matcher_weight: f32) -> Result<usize, CliError> {
+/// Cells per side of the local map: each option is in its range already (checked while parsing),
+/// but together they can still ask for more memory than any map needs.
+fn map_side(size_m: f32, cell_m: f32) -> Result<usize, CliError> {
     /// 4 million cells, about 200 MB: past this a typo is likelier than a wish.
     const MAX_SIDE: f32 = 2048.0;
-    if !(cell_m.is_finite() && cell_m > 0.0) {
-        return Err(CliError(format!(
-            "--map-cell {cell_m}: must be a positive length in m"
-        )));
-    }
     let side = (size_m / cell_m).ceil();
-    if !(size_m.is_finite() && size_m > 0.0 && side <= MAX_SIDE) {
+    if side > MAX_SIDE {
         return Err(CliError(format!(
-            "--map-size {size_m}: must be positive and at most {MAX_SIDE} cells of {cell_m} m"
-        )));
-    }
-    if !(matcher_weight.is_finite() && matcher_weight >= 0.0) {
-        return Err(CliError(format!(
-            "--map-matcher-weight {matcher_weight}: must be zero or positive"
+            "--map-size {size_m}: at most {MAX_SIDE} cells of {cell_m} m a side (a smaller map or larger --map-cell)"
         )));
     }
     Ok(side as usize)

@@ -2,6 +2,7 @@
 //! ground truth in the benchmark formats (DESIGN.md §4, §5).
 
 use crate::log_args::LogArgs;
+use crate::numeric::{within, Range};
 use crate::report::{print_summary, progress, CliError, CliResult};
 use crate::sim_closed_loop;
 use crate::sim_plot;
@@ -47,13 +48,13 @@ pub struct SimArgs {
     #[arg(long, default_value = "f450")]
     pub vehicle: String,
     /// Run length of the closed-loop scenarios (default 60) and of the test pilot's `hold`;
-    /// an upper bound on the flight for `survey`, s.
-    #[arg(long)]
+    /// an upper bound on the flight for `survey`, s. Valid range: (0, 86400].
+    #[arg(long, value_parser = within::<f64>(Range::above(0.0, 86400.0)))]
     pub duration: Option<f64>,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Physics rate, Hz (fixed-step RK4).
-    #[arg(long, default_value_t = 1000.0)]
+    /// Physics rate, Hz (fixed-step RK4). Valid range: [100, 20000].
+    #[arg(long, default_value_t = 1000.0, value_parser = within::<f64>(Range::closed(100.0, 20000.0)))]
     pub physics_hz: f64,
     /// Turn off turbulence.
     #[arg(long)]
@@ -85,7 +86,7 @@ fn parse_push(s: &str) -> Result<Push, String> {
         .collect::<Result<_, _>>()?;
     match v[..] {
         [start_s, duration_s, fx, fy, fz]
-            if v.iter().all(|x| x.is_finite()) && duration_s >= 0.0 =>
+            if v.iter().all(|x| x.is_finite()) && start_s >= 0.0 && duration_s >= 0.0 =>
         {
             Ok(Push {
                 start_s,
@@ -93,7 +94,10 @@ fn parse_push(s: &str) -> Result<Push, String> {
                 force_n: Vec3::new(fx, fy, fz),
             })
         }
-        _ => Err("expected START,DURATION,FX,FY,FZ (five finite numbers, duration >= 0)".into()),
+        _ => Err(
+            "expected START,DURATION,FX,FY,FZ (five finite numbers, start and duration >= 0)"
+                .into(),
+        ),
     }
 }
 

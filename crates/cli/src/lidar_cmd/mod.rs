@@ -5,6 +5,7 @@ mod decode;
 mod plot;
 mod record;
 
+use crate::numeric::Range;
 use crate::report::{CliError, CliResult};
 use clap::{Args, Subcommand};
 use plumbline_io::carmen::write_robotlaser1;
@@ -12,6 +13,9 @@ use plumbline_io::serial::{DecodeSummary, DecodedScan, Device};
 use serde_json::{json, Map, Value};
 use std::io::Write;
 use std::path::Path;
+
+/// Line speeds a serial lidar can be run at; outside this, stamps by byte position mean nothing.
+const BAUD_RANGE: Range = Range::closed(1200.0, 4_000_000.0);
 
 #[derive(Args)]
 pub struct LidarArgs {

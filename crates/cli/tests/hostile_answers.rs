@@ -1,0 +1,231 @@
+//! Hostile inputs that used to give a wrong answer with exit 0: each case must now be an error
+//! naming what is wrong, or a loud, documented degraded mode. Run against the real binary.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_plumbline");
+const REPO_DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data");
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "plumbline-hostile-answers-{name}-{}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn run<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn last_json(out: &Output) -> serde_json::Value {
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    serde_json::from_str(stdout.lines().last().unwrap_or("")).unwrap()
+}
+
+// ---- eval: no perfect score for nothing ----
+
+const TRAJ: &str = "1.0 0 0 0\n2.0 1 0 0\n3.0 2 0 0\n4.0 3 0 0\n";
+
+#[test]
+fn eval_with_an_empty_relations_file_is_an_error() {
+    let dir = tmp_dir("eval-empty");
+    let traj = write(&dir, "t.traj", TRAJ);
+    let rel = write(&dir, "empty.relations", "");
+    let out = eval(&traj, &rel);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("no relation"), "{}", stderr(&out));
+}
+
+fn eval(traj: &Path, rel: &Path) -> Output {
+    run(&[
+        "eval".as_ref(),
+        traj.as_os_str(),
+        rel.as_os_str(),
+        "--json".as_ref(),
+    ])
+}
+
+#[test]
+fn eval_where_no_stamp_matches_is_an_error() {
+    let dir = tmp_dir("eval-nomatch");
+    let traj = write(&dir, "t.traj", TRAJ);
+    let rel = write(
+        &dir,
+        "r.relations",
+        "11.0 12.0 1 0 0 0 0 0\n12.0 13.0 1 0 0 0 0 0\n",
+    );
+    let out = eval(&traj, &rel);
+    assert!(!out.status.success());
+    let e = stderr(&out);
+    assert!(e.contains("none of the 2 relations"), "{e}");
+    assert!(out.stdout.is_empty(), "no summary with a score");
+}
+
+#[test]
+fn eval_with_a_low_match_ratio_warns_loudly_and_says_so_in_the_json() {
+    let dir = tmp_dir("eval-low");
+    let traj = write(&dir, "t.traj", TRAJ);
+    let rel = write(
+        &dir,
+        "r.relations",
+        "1.0 2.0 1 0 0 0 0 0\n11.0 12.0 1 0 0 0 0 0\n12.0 13.0 1 0 0 0 0 0\n",
+    );
+    let out = eval(&traj, &rel);
+    assert!(out.status.success());
+    assert!(
+        stderr(&out).contains("WARNING: only 1 of 3"),
+        "{}",
+        stderr(&out)
+    );
+    let j = last_json(&out);
+    assert_eq!(j["matched"], 1);
+    assert_eq!(j["low_match_ratio"], true);
+    assert!((j["match_ratio"].as_f64().unwrap() - 1.0 / 3.0).abs() < 1e-12);
+
+    let good = write(
+        &dir,
+        "g.relations",
+        "1.0 2.0 1 0 0 0 0 0\n2.0 3.0 1 0 0 0 0 0\n",
+    );
+    let j = last_json(&eval(&traj, &good));
+    assert_eq!(j["low_match_ratio"], false);
+    assert_eq!(j["match_ratio"], 1.0);
+}
+
+// ---- CARMEN records parse exactly ----
+
+const FLASER_OK: &str = "FLASER 3 1.0 2.0 3.0 0.5 0.25 0.1 0.5 0.25 0.1 100.25 host 1.5\n";
+
+#[test]
+fn a_beam_count_that_disagrees_with_the_line_is_an_error_naming_file_line_and_field() {
+    let dir = tmp_dir("carmen-count");
+    let cases = [
+        ("flaser-more", "FLASER 2 1.0 2.0 3.0 0.5 0.25 0.1 0.5 0.25 0.1 100.25 host 1.5\n"),
+        ("flaser-less", "FLASER 4 1.0 2.0 3.0 0.5 0.25 0.1 0.5 0.25 0.1 100.25 host 1.5\n"),
+        ("flaser-trailing", "FLASER 3 1.0 2.0 3.0 0.5 0.25 0.1 0.5 0.25 0.1 100.25 host 1.5 9\n"),
+        ("robotlaser-remissions", "ROBOTLASER1 0 -2.094395 4.188790 0.006136 5.600 0.010 0 4 1.0 5.6 2.5 0.0 1 0.1 0.2 0 0 0 1.5 2.5 0.3 0 0 0 0 0 11.5 host 0.5\n"),
+        ("odom-trailing", "ODOM 1 2 0.5 0 0 0 99.0 h 99.0 3\n"),
+    ];
+    for (name, bad) in cases {
+        let log = write(
+            &dir,
+            &format!("{name}.clf"),
+            &format!("{FLASER_OK}{FLASER_OK}{bad}{FLASER_OK}"),
+        );
+        let out = run(&["odometry".as_ref(), log.as_os_str()]);
+        assert!(!out.status.success(), "{name} accepted");
+        let e = stderr(&out);
+        assert!(e.contains(&format!("{name}.clf:3:")), "{name}: {e}");
+        assert!(e.contains("field"), "{name}: {e}");
+    }
+}
+
+// ---- numeric options: a documented range, checked at parse time ----
+
+/// Every numeric option of every subcommand (the subcommand, the other arguments it needs, the
+/// option) with the range its help text documents.
+const NUMERIC_OPTIONS: &[(&[&str], &[&str], &str, &str)] = &[
+    (&["odometry"], &["x.clf"], "--keyframe-distance", "(0, 10]"),
+    (
+        &["odometry"],
+        &["x.clf"],
+        "--keyframe-angle-deg",
+        "(0, 180]",
+    ),
+    (&["odometry"], &["x.clf"], "--map-cell", "[0.01, 10]"),
+    (&["odometry"], &["x.clf"], "--map-size", "(0, 10000]"),
+    (
+        &["odometry"],
+        &["x.clf"],
+        "--map-matcher-weight",
+        "[0, 100]",
+    ),
+    (&["odometry"], &["x.clf"], "--fov-deg", "(0, 360]"),
+    (&["odometry"], &["x.clf"], "--max-range", "(0, 1000]"),
+    (&["eval"], &["a", "b"], "--tolerance", "[0, 1]"),
+    (&["sim"], &[], "--duration", "(0, 86400]"),
+    (&["sim"], &[], "--physics-hz", "[100, 20000]"),
+    (&["sim"], &[], "--fov-deg", "(0, 360]"),
+    (&["sim"], &[], "--max-range", "(0, 1000]"),
+    (
+        &["lidar", "decode"],
+        &["--device", "xv11", "x.bin"],
+        "--baud",
+        "[1200, 4000000]",
+    ),
+    (&["lidar", "record"], RECORD, "--baud", "[1200, 4000000]"),
+    (&["lidar", "record"], RECORD, "--duration", "(0, 86400]"),
+    (&["lidar", "record"], RECORD, "--idle-timeout", "(0, 3600]"),
+];
+
+const RECORD: &[&str] = &[
+    "--device",
+    "xv11",
+    "--port",
+    "/nonexistent",
+    "--out",
+    "x.bin",
+];
+
+#[test]
+fn every_numeric_option_refuses_nan_infinity_and_out_of_range_values_at_parse_time() {
+    for (command, others, option, range) in NUMERIC_OPTIONS {
+        let zero_is_valid = range.starts_with("[0,");
+        for bad in ["NaN", "inf", "-inf", "-1", "1e30", "0", "nonsense", ""] {
+            if bad == "0" && zero_is_valid {
+                continue;
+            }
+            let mut args: Vec<String> = command
+                .iter()
+                .chain(*others)
+                .map(|a| a.to_string())
+                .collect();
+            args.push(format!("{option}={bad}"));
+            let out = run(&args);
+            assert_eq!(out.status.code(), Some(2), "{args:?} accepted");
+            let e = stderr(&out);
+            assert!(e.contains(option) && e.contains(range), "{args:?}: {e}");
+        }
+        // The range is documented where the user looks for it.
+        let mut help = command.to_vec();
+        help.push("--help");
+        let text = String::from_utf8_lossy(&run(&help).stdout).into_owned();
+        let doc = text
+            .split(&format!("{option} <"))
+            .nth(1)
+            .unwrap_or_else(|| panic!("{help:?} has no {option}"));
+        let doc = doc.split("\n      -").next().unwrap();
+        assert!(
+            doc.contains(&format!("Valid range: {range}")),
+            "{help:?} {option}: {doc}"
+        );
+    }
+}
+
+#[test]
+fn baud_zero_no_longer_shifts_stamps_it_is_refused() {
+    let capture = Path::new(REPO_DATA).join("captures/neato-xv11/hand_in_box.bin");
+    let out = run(&[
+        "lidar".as_ref(),
+        "decode".as_ref(),
+        "--device".as_ref(),
+        "xv11".as_ref(),
+        capture.as_os_str(),
+        "--baud".as_ref(),
+        "0".as_ref(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+}
