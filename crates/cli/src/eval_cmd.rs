@@ -35,6 +35,12 @@ pub fn run(args: EvalArgs) -> CliResult {
             args.relations.display()
         ))
     })?;
+    if s.on_lost > 0 {
+        eprintln!(
+            "plumbline: {} of {} relations touch poses the trajectory marks lost (predicted, not measured); they are not scored",
+            s.on_lost, s.relations
+        );
+    }
     let low_match = s.match_ratio < LOW_MATCH_RATIO;
     if low_match {
         eprintln!(
@@ -44,10 +50,10 @@ pub fn run(args: EvalArgs) -> CliResult {
             s.relations,
             100.0 * s.match_ratio
         );
-    } else if s.matched < s.relations {
+    } else if s.matched + s.on_lost < s.relations {
         eprintln!(
             "plumbline: {} of {} relations have a timestamp that is not in the trajectory (within {} s); they are not scored",
-            s.relations - s.matched,
+            s.relations - s.matched - s.on_lost,
             s.relations,
             args.tolerance
         );
@@ -57,6 +63,7 @@ pub fn run(args: EvalArgs) -> CliResult {
         "matched": s.matched,
         "match_ratio": s.match_ratio,
         "low_match_ratio": low_match,
+        "lost_relations": s.on_lost,
         "trans_mean_m": s.trans_mean_m,
         "trans_std_m": s.trans_std_m,
         "trans2_mean_m2": s.trans2_mean_m2,

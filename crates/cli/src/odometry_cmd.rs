@@ -119,6 +119,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
     let mut first_failure: Option<String> = None;
     let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
     let mut previous_odom: Option<OdomPose> = None;
+    let mut lost = LostTally::default();
     for (i, rec) in log.scans.iter().enumerate() {
         *scan = rec.to_scan().map_err(|_| {
             CliError(format!(
@@ -165,10 +166,13 @@ pub fn run(args: OdometryArgs) -> CliResult {
                 });
             }
         }
+        let predicted = matches!(step, OdometryStep::Predicted { .. });
+        lost.note(rec.timestamp_s, predicted);
         trajectory.push(TrajectoryPoint {
             timestamp_text: rec.timestamp_text.clone(),
             timestamp_s: rec.timestamp_s,
             pose: OdomPose::from_f32(odometry.pose()),
+            lost: predicted,
         });
         bar.inc(1);
     }
@@ -176,6 +180,13 @@ pub fn run(args: OdometryArgs) -> CliResult {
     if let Some(f) = &first_failure {
         eprintln!(
             "plumbline: {failed} match(es) failed and were bridged by prediction; first: {f}"
+        );
+    }
+    if lost.scans > 0 {
+        eprintln!(
+            "plumbline: no measurement for {:.2} s in {} interval(s) ({} scans): their poses are a decaying \
+             prediction, marked by `# lost` lines in the trajectory and not scored by `eval`",
+            lost.seconds, lost.intervals, lost.scans
         );
     }
     if let Some(path) = &args.out {
@@ -192,6 +203,9 @@ pub fn run(args: OdometryArgs) -> CliResult {
         "median_match_us": percentile(&times_us, 0.5),
         "p99_match_us": percentile(&times_us, 0.99),
         "failed_matches": failed,
+        "lost_scans": lost.scans,
+        "lost_intervals": lost.intervals,
+        "lost_s": lost.seconds,
         "keyframes": keyframes,
         "degenerate_matches": degenerate,
         "rejected_points": rejected,
@@ -222,6 +236,32 @@ fn map_side(size_m: f32, cell_m: f32) -> Result<usize, CliError> {
         )));
     }
     Ok(side as usize)
+}
+
+/// How long the odometry went without a measurement: the time from the last measured scan to
+/// the last scan of each run of predicted ones.
+#[derive(Default)]
+struct LostTally {
+    scans: usize,
+    intervals: usize,
+    seconds: f64,
+    previous: Option<(f64, bool)>,
+}
+
+impl LostTally {
+    fn note(&mut self, stamp_s: f64, predicted: bool) {
+        if predicted {
+            self.scans += 1;
+            let (was_lost, dt) = match self.previous {
+                Some((t, was_lost)) => (was_lost, stamp_s - t),
+                None => (false, 0.0),
+            };
+            self.intervals += !was_lost as usize;
+            // Stamps that go backwards are counted and reported by the reader; they add nothing.
+            self.seconds += dt.max(0.0);
+        }
+        self.previous = Some((stamp_s, predicted));
+    }
 }
 
 /// Scan-to-keyframe odometry, with or without the local map.

@@ -229,3 +229,104 @@ fn baud_zero_no_longer_shifts_stamps_it_is_refused() {
     ]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+// ---- a lidar that stops returning is not a vehicle that keeps turning ----
+
+/// Sum of |heading change| over consecutive rows of a trajectory, from row `from` on.
+fn turned(rows: &[(String, f64)], from: usize) -> f64 {
+    rows[from..]
+        .windows(2)
+        .map(|w| {
+            let d = (w[1].1 - w[0].1).rem_euclid(std::f64::consts::TAU);
+            d.min(std::f64::consts::TAU - d)
+        })
+        .sum()
+}
+
+#[test]
+fn a_capture_that_spins_down_is_marked_lost_not_spun_for_turns() {
+    let dir = tmp_dir("spin-down");
+    let capture = Path::new(REPO_DATA).join("captures/neato-xv11/hand_in_box.bin");
+    let log = dir.join("hib.log");
+    let traj = dir.join("hib.traj");
+    let decode = run(&[
+        "lidar".as_ref(),
+        "decode".as_ref(),
+        "--device".as_ref(),
+        "xv11".as_ref(),
+        capture.as_os_str(),
+        "--out".as_ref(),
+        log.as_os_str(),
+    ]);
+    assert!(decode.status.success(), "{}", stderr(&decode));
+    let out = run(&[
+        "odometry".as_ref(),
+        log.as_os_str(),
+        "--out".as_ref(),
+        traj.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j = last_json(&out);
+    let lost_scans = j["lost_scans"].as_u64().unwrap();
+    assert!(lost_scans >= 30, "{j}");
+    assert!(j["lost_s"].as_f64().unwrap() > 4.0, "{j}");
+    assert!(
+        stderr(&out).contains("no measurement for"),
+        "{}",
+        stderr(&out)
+    );
+
+    let text = std::fs::read_to_string(&traj).unwrap();
+    let lost_lines: Vec<&str> = text.lines().filter(|l| l.starts_with("# lost ")).collect();
+    let marked: u64 = lost_lines
+        .iter()
+        .map(|l| l.split_whitespace().nth(4).unwrap().parse::<u64>().unwrap())
+        .sum();
+    assert_eq!(marked, lost_scans, "{lost_lines:?}");
+    let rows: Vec<(String, f64)> = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            (f[0].to_string(), f[3].parse().unwrap())
+        })
+        .collect();
+    // The last run of lost poses: however long it lasts, it turns less than the prediction bound
+    // (twice the last measured motion) allows, and it ends at rest.
+    let last = lost_lines.last().unwrap();
+    let first_lost = last.split_whitespace().nth(2).unwrap();
+    let k = rows.iter().position(|r| r.0 == first_lost).unwrap();
+    let biggest_measured_step = (1..k)
+        .map(|i| turned(&rows[i - 1..=i], 0))
+        .fold(0.0, f64::max);
+    let lost_turn = turned(&rows, k - 1);
+    assert!(
+        lost_turn <= 2.0 * biggest_measured_step + 1e-3,
+        "turned {lost_turn} rad while lost (largest measured step {biggest_measured_step})"
+    );
+    assert!(
+        turned(&rows[rows.len() - 5..], 0) < 1e-3,
+        "still turning at the end"
+    );
+
+    // `eval` reads the file and does not score relations on lost poses.
+    let measured = &rows[k - 1].0;
+    let relations = write(
+        &dir,
+        "r.relations",
+        &format!(
+            "{} {measured} 0 0 0 0 0 0\n{measured} {} 0 0 0 0 0 0\n",
+            rows[0].0,
+            rows.last().unwrap().0
+        ),
+    );
+    let e = eval(&traj, &relations);
+    assert!(e.status.success(), "{}", stderr(&e));
+    let s = last_json(&e);
+    assert_eq!(
+        (s["matched"].as_u64(), s["lost_relations"].as_u64()),
+        (Some(1), Some(1)),
+        "{s}"
+    );
+}

@@ -2,7 +2,8 @@
 //!
 //! For each relation, the estimated motion d = inv(x_i) x_j is compared with the reference d*
 //! through e = inv(d*) d. Relations whose timestamps are not both in the trajectory are counted,
-//! never silently dropped.
+//! never silently dropped; so are relations that touch a pose the trajectory marks lost
+//! (predicted, not measured), which are not scored either.
 
 use crate::relations::Relation;
 use crate::trajectory::TrajectoryPoint;
@@ -23,17 +24,26 @@ pub const LOW_MATCH_RATIO: f64 = 0.5;
 #[derive(Clone, Debug, PartialEq)]
 pub enum EvalError {
     NoRelations,
-    NoneMatched { relations: usize, tolerance_s: f64 },
+    NoneMatched {
+        relations: usize,
+        on_lost: usize,
+        tolerance_s: f64,
+    },
 }
 
 impl std::fmt::Display for EvalError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             EvalError::NoRelations => f.write_str("the relations file holds no relation: nothing to score"),
-            EvalError::NoneMatched { relations, tolerance_s } => write!(
+            EvalError::NoneMatched {
+                relations,
+                on_lost,
+                tolerance_s,
+            } => write!(
                 f,
-                "none of the {relations} relations has both timestamps in the trajectory (within {tolerance_s} s): \
-                 is it the trajectory of the same log, and are its timestamps copied from the log?"
+                "none of the {relations} relations has both timestamps at measured poses of the trajectory \
+                 (within {tolerance_s} s; {on_lost} touch poses marked lost): is it the trajectory of the \
+                 same log, and are its timestamps copied from the log?"
             ),
         }
     }
@@ -47,6 +57,8 @@ pub struct EvalSummary {
     pub matched: usize,
     /// `matched / relations`, in (0, 1].
     pub match_ratio: f64,
+    /// Relations with both stamps in the trajectory but at least one on a pose marked lost.
+    pub on_lost: usize,
     pub trans_mean_m: f64,
     pub trans_std_m: f64,
     pub trans2_mean_m2: f64,
@@ -107,10 +119,15 @@ pub fn evaluate(
     }
     let index = StampIndex::new(trajectory, tolerance_s);
     let mut errors = Vec::new();
+    let mut on_lost = 0;
     for (k, rel) in relations.iter().enumerate() {
         let (Some(a), Some(b)) = (index.find(rel.t1_s), index.find(rel.t2_s)) else {
             continue;
         };
+        if a.lost || b.lost {
+            on_lost += 1;
+            continue;
+        }
         let estimated = a.pose.between(b.pose);
         let e = rel.motion.inverse().compose(estimated);
         errors.push((k, e.x_m.hypot(e.y_m), e.theta_rad.abs().to_degrees()));
@@ -118,6 +135,7 @@ pub fn evaluate(
     if errors.is_empty() {
         return Err(EvalError::NoneMatched {
             relations: relations.len(),
+            on_lost,
             tolerance_s,
         });
     }
@@ -130,6 +148,7 @@ pub fn evaluate(
         relations: relations.len(),
         matched: errors.len(),
         match_ratio: errors.len() as f64 / relations.len() as f64,
+        on_lost,
         trans_mean_m,
         trans_std_m,
         trans2_mean_m2,
@@ -166,6 +185,7 @@ mod tests {
             timestamp_text: format!("{t}"),
             timestamp_s: t,
             pose: OdomPose::new(x, y, th),
+            lost: false,
         }
     }
 
@@ -254,5 +274,32 @@ mod tests {
             motion: OdomPose::new(1.0, 0.0, 0.0),
         }];
         assert!(evaluate(&traj, &half, DEFAULT_TIME_TOLERANCE_S).is_err());
+    }
+
+    #[test]
+    fn relations_touching_lost_poses_are_counted_not_scored() {
+        let mut traj = [
+            point(1.0, 0.0, 0.0, 0.0),
+            point(2.0, 1.0, 0.0, 0.0),
+            point(3.0, 9.0, 9.0, 3.0),
+        ];
+        traj[2].lost = true;
+        let rel = |t1: f64, t2: f64| Relation {
+            t1_s: t1,
+            t2_s: t2,
+            motion: OdomPose::new(t2 - t1, 0.0, 0.0),
+        };
+        let s = evaluate(
+            &traj,
+            &[rel(1.0, 2.0), rel(2.0, 3.0)],
+            DEFAULT_TIME_TOLERANCE_S,
+        )
+        .unwrap();
+        assert_eq!((s.matched, s.on_lost), (1, 1));
+        assert!(s.trans_mean_m < 1e-12, "the lost pose is not scored");
+        assert!(matches!(
+            evaluate(&traj, &[rel(2.0, 3.0)], DEFAULT_TIME_TOLERANCE_S),
+            Err(EvalError::NoneMatched { on_lost: 1, .. })
+        ));
     }
 }
