@@ -330,3 +330,109 @@ fn a_capture_that_spins_down_is_marked_lost_not_spun_for_turns() {
         "{s}"
     );
 }
+
+// ---- decoders refuse what the device cannot have sent ----
+
+fn decode(device: &str, capture: &Path) -> Output {
+    run(&[
+        "lidar".as_ref(),
+        "decode".as_ref(),
+        "--device".as_ref(),
+        device.as_ref(),
+        capture.as_os_str(),
+        "--json".as_ref(),
+    ])
+}
+
+/// A fixed xorshift stream: reproducible bytes with no structure.
+fn noise(len: usize, seed: u64) -> Vec<u8> {
+    let mut x = seed | 1;
+    (0..len)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x as u8
+        })
+        .collect()
+}
+
+/// RPLIDAR standard-scan bytes: the response descriptor, then `turns` revolutions of one node a
+/// degree clockwise, 2 m away.
+fn rplidar_capture(turns: usize) -> Vec<u8> {
+    let mut out = vec![0xA5, 0x5A, 0x05, 0x00, 0x00, 0x40, 0x81];
+    for _ in 0..turns {
+        for deg in 0..360u16 {
+            let start = u8::from(deg == 0);
+            out.push(47 << 2 | (1 - start) << 1 | start);
+            out.extend(((deg * 64) << 1 | 1).to_le_bytes());
+            out.extend(8000u16.to_le_bytes());
+        }
+    }
+    out
+}
+
+#[test]
+fn random_bytes_and_an_xv11_capture_are_not_an_rplidar() {
+    let dir = tmp_dir("rplidar-foreign");
+    let random = dir.join("random.bin");
+    std::fs::write(&random, noise(1 << 20, 7)).unwrap();
+    let xv11 = Path::new(REPO_DATA).join("captures/neato-xv11/hand_in_box.bin");
+    for capture in [random, xv11] {
+        let out = decode("rplidar", &capture);
+        assert!(!out.status.success(), "{capture:?} decoded as an RPLIDAR");
+        let e = stderr(&out);
+        assert!(
+            e.contains("do not look like rplidar data: 0 of") && e.contains("is --device right?"),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn a_real_looking_rplidar_stream_still_decodes_and_counts_what_it_refused() {
+    let dir = tmp_dir("rplidar-good");
+    let good = dir.join("good.bin");
+    // Noise before the good turns (a capture started mid-glitch): refused and counted, and the
+    // good turns are kept.
+    let mut bytes = noise(2000, 3);
+    bytes.extend(rplidar_capture(3));
+    std::fs::write(&good, bytes).unwrap();
+    let out = decode("rplidar", &good);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let j = last_json(&out);
+    assert_eq!(j["revolutions"], 3, "{j}");
+    assert!(j["implausible_revolutions"].as_u64().unwrap() > 0, "{j}");
+    let rpm = j["rpm_median"].as_f64().unwrap();
+    assert!((rpm - 60.0 / (360.0 * 0.0005)).abs() < 1.0, "{j}");
+}
+
+/// A SCIP line: payload and its sum character (the low 6 bits of the byte sum, plus 0x30).
+fn scip_line(payload: &[u8]) -> Vec<u8> {
+    let sum = payload.iter().map(|&b| u32::from(b)).sum::<u32>();
+    let mut line = payload.to_vec();
+    line.push((sum & 0x3F) as u8 + 0x30);
+    line.push(b'\n');
+    line
+}
+
+#[test]
+fn an_urg_reply_for_steps_the_sensor_does_not_have_is_refused() {
+    let dir = tmp_dir("urg-steps");
+    // GD from step 760 to 780, three characters a value: the URG-04LX ends at step 768.
+    let mut reply = b"GD0760078000\n".to_vec();
+    reply.extend(scip_line(b"00"));
+    reply.extend(scip_line(b"0000"));
+    let data: Vec<u8> = (0..21).flat_map(|_| *b"0Fh").collect();
+    reply.extend(scip_line(&data));
+    reply.push(b'\n');
+    let capture = write(&dir, "urg.bin", "");
+    std::fs::write(&capture, &reply).unwrap();
+    let out = decode("urg", &capture);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("0 of 1 revolutions plausible"),
+        "{}",
+        stderr(&out)
+    );
+}

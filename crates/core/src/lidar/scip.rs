@@ -127,6 +127,13 @@ struct Request {
     values: usize,
 }
 
+impl Request {
+    /// The first step of the last value's cluster: the furthest angle the reply covers.
+    fn last_step(&self) -> usize {
+        usize::from(self.start) + (self.values - 1) * usize::from(self.cluster)
+    }
+}
+
 /// The SCIP 2.0 sum character of a line's bytes.
 pub fn line_sum(bytes: &[u8]) -> u8 {
     (bytes.iter().fold(0u32, |s, &b| s + u32::from(b)) & 0x3F) as u8 + 0x30
@@ -169,7 +176,8 @@ fn parse_echo(line: &[u8]) -> Option<Request> {
 }
 
 /// Bytes in, scans out. State: one line, one [`ScipScan`] (4 bytes a value), about 3.2 KB for
-/// `N = 769`.
+/// `N = 769`. `N` is the sensor's step count (steps `0..N`; URG-04LX: 769): a reply for steps
+/// beyond it is for angles the sensor does not have and is counted as implausible.
 #[derive(Clone, Debug)]
 pub struct ScipDecoder<const N: usize> {
     line: [u8; MAX_LINE],
@@ -262,13 +270,17 @@ impl<const N: usize> ScipDecoder<N> {
     fn on_line(&mut self, line: &[u8]) {
         match self.state {
             State::Echo => match parse_echo(line) {
-                Some(req) if req.values <= N => {
-                    self.request = req;
-                    self.state = State::Status;
-                }
-                Some(_) => {
+                Some(req) if req.values > N => {
                     self.stats.overflow += 1;
                     self.state = State::Skip;
+                }
+                Some(req) if req.last_step() >= N => {
+                    self.stats.implausible += 1;
+                    self.state = State::Skip;
+                }
+                Some(req) => {
+                    self.request = req;
+                    self.state = State::Status;
                 }
                 None => self.state = State::Skip,
             },
@@ -399,6 +411,20 @@ mod tests {
         let (scans, stats) = decode(b"GS0044004500\n00P\n00000\nCBCB1k\n\n");
         assert!(scans.is_empty());
         assert_eq!(stats.malformed, 1);
+    }
+
+    #[test]
+    fn steps_beyond_the_sensor_are_implausible_not_decoded() {
+        // Steps 760..=780: the URG-04LX has steps 0..=768; a well-formed reply, impossible angles.
+        let values: Vec<u32> = (0..21).map(|_| 1000).collect();
+        let reply = scip_scan_reply(b"GD0760078000", b"00", 0x10, &values, 3);
+        let (scans, stats) = decode(&reply);
+        assert!(scans.is_empty());
+        assert_eq!((stats.implausible, stats.revolutions), (1, 0));
+        // The same reply within the sensor decodes.
+        let reply = scip_scan_reply(b"GD0740076000", b"00", 0x10, &values, 3);
+        let (scans, stats) = decode(&reply);
+        assert_eq!((scans.len(), stats.implausible), (1, 0));
     }
 
     #[test]
