@@ -306,7 +306,7 @@ fn rasterize(args: &SimArgs, log_path: &Path) -> CliResult {
         .unwrap_or("log")
         .trim_end_matches("-corrected")
         .to_string();
-    let (world, grid) = sim_world::rasterize(&log, &name)?;
+    let (world, grid) = sim_world::rasterize(&log, &log_path.display().to_string(), &name)?;
     sim_world::write_world(dir, &world, &grid)?;
     let [x0, y0, x1, y1] = world.bounds();
     let summary = json!({

@@ -436,3 +436,102 @@ fn an_urg_reply_for_steps_the_sensor_does_not_have_is_refused() {
         stderr(&out)
     );
 }
+
+// ---- worlds are validated before flying, rasters are bounded ----
+
+const ROOM: &str = "outline 0 0 6 0 6 4 0 4\n";
+
+fn sim_world(world: &Path) -> Output {
+    run(&[
+        "sim".as_ref(),
+        "--world".as_ref(),
+        world.as_os_str(),
+        "--scenario".as_ref(),
+        "hold".as_ref(),
+        "--duration".as_ref(),
+        "1".as_ref(),
+        "--json".as_ref(),
+    ])
+}
+
+#[test]
+fn a_world_that_cannot_be_flown_is_refused_with_its_line() {
+    let dir = tmp_dir("worlds");
+    let cases = [
+        (
+            "outside",
+            format!("{ROOM}start 10 2 0\n"),
+            ":2",
+            "not enclosed",
+        ),
+        (
+            "far",
+            format!("{ROOM}start 1e30 2 0\n"),
+            ":2",
+            "from the origin",
+        ),
+        (
+            "far-wall",
+            format!("start 3 2 0\n{ROOM}wall 0 0 -1e7 0\n"),
+            ":3",
+            "from the origin",
+        ),
+        (
+            "twice",
+            format!("start 3 2 0\n{ROOM}start 2 2 0\n"),
+            ":3",
+            "line 1",
+        ),
+        (
+            "two-ceilings",
+            format!("ceiling 3\nstart 3 2 0\n{ROOM}ceiling 2.5\n"),
+            ":4",
+            "line 1",
+        ),
+        (
+            "waypoint-outside",
+            format!("start 3 2 0\n{ROOM}path 1 1 5 3 9 9\n"),
+            ":3",
+            "waypoint 3",
+        ),
+    ];
+    for (name, text, line, why) in cases {
+        let path = write(&dir, &format!("{name}.world"), &text);
+        let out = sim_world(&path);
+        assert!(!out.status.success(), "{name} flown");
+        let e = stderr(&out);
+        assert!(
+            e.contains(&format!("{name}.world")) && e.contains(why),
+            "{name}: {e}"
+        );
+        assert!(e.contains(&format!("line {}", &line[1..])), "{name}: {e}");
+    }
+    // The same room with its start inside flies.
+    let good = write(&dir, "good.world", &format!("{ROOM}start 3 2 0\n"));
+    let out = sim_world(&good);
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+#[test]
+fn rasterizing_a_log_with_an_absurd_pose_is_refused_with_its_line() {
+    let dir = tmp_dir("rasterize");
+    let scan = |x: &str| {
+        let ranges = vec!["2.0"; 181].join(" ");
+        format!("FLASER 181 {ranges} {x} 0 0 {x} 0 0 10.5 host 10.5\n")
+    };
+    for far in ["1e30", "1e7"] {
+        let text = format!("{}{}{}{}", scan("0"), scan("0.1"), scan(far), scan("0.2"));
+        let log = write(&dir, &format!("far-{far}.clf"), &text);
+        let out = run(&[
+            "sim".as_ref(),
+            "--rasterize".as_ref(),
+            log.as_os_str(),
+            "--out".as_ref(),
+            dir.join(format!("out-{far}")).as_os_str(),
+        ]);
+        assert_eq!(out.status.code(), Some(1), "{far}: {}", stderr(&out));
+        let e = stderr(&out);
+        assert!(e.contains(&format!("far-{far}.clf:3:")), "{far}: {e}");
+        assert!(e.contains("more than the"), "{far}: {e}");
+    }
+}

@@ -28,4 +28,5 @@ pub mod sensors;
 pub mod truth;
 pub mod vehicle;
 pub mod world;
+pub mod world_check;
 pub mod ziggurat;

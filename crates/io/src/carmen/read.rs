@@ -64,6 +64,8 @@ pub struct ReadStats {
 #[derive(Clone, Debug, Default)]
 pub struct CarmenLog {
     pub scans: Vec<LaserRecord>,
+    /// The 1-based line each scan was read from, so later checks can name it.
+    pub scan_lines: Vec<usize>,
     pub odometry: Vec<OdomRecord>,
     pub params: Vec<(String, String)>,
     pub stats: ReadStats,
@@ -142,6 +144,7 @@ pub fn parse_log<R: BufRead>(
                     &mut log.stats.robotlaser1
                 }) += 1;
                 log.scans.push(rec);
+                log.scan_lines.push(line_no);
             }
             Ok(Parsed::Odom(o)) => {
                 log.stats.odom += 1;
