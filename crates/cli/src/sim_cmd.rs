@@ -14,7 +14,9 @@ use plumbline_core::msgs::{ImuSample, SonarSample};
 use plumbline_io::carmen::{write_robotlaser1, LaserRecord};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
-use plumbline_sim::runner::{Recorder, SetupError, SimConfig, StateSample, Status, TruthPose};
+use plumbline_sim::runner::{
+    Recorder, SetupError, SimConfig, StateSample, Status, TruthPose, PHYSICS_HZ_RANGE,
+};
 use plumbline_sim::scenario::{self, Report, ScenarioError};
 use plumbline_sim::sensors::lidar::{LidarProfile, LidarScan};
 use plumbline_sim::truth::relations;
@@ -49,7 +51,8 @@ pub struct SimArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Physics rate, Hz (fixed-step RK4). Valid range: [100, 20000].
-    #[arg(long, default_value_t = 1000.0, value_parser = within::<f64>(Range::closed(100.0, 20000.0)))]
+    #[arg(long, default_value_t = 1000.0, value_parser = within::<f64>(
+        Range::closed(*PHYSICS_HZ_RANGE.start(), *PHYSICS_HZ_RANGE.end())))]
     pub physics_hz: f64,
     /// Turn off turbulence.
     #[arg(long)]

@@ -4,7 +4,7 @@
 
 use crate::math::Vec3;
 use crate::occupancy::Occupancy;
-use crate::world_check::{enclosed, world_number, OnceOnly};
+use crate::world_check::{check_enclosed, world_number, OnceOnly};
 
 /// A wall from `a` to `b` (world x, y in metres), floor to ceiling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -243,27 +243,7 @@ impl World {
         let Some(start_line) = start_line else {
             return Err(whole("world has no `start` line"));
         };
-        let outside = |what: &str, p: [f64; 2], line: usize| {
-            WorldError {
-            line,
-            reason: format!(
-                "{what} ({}, {}) is not enclosed by walls: some directions from it meet no wall, so \
-                 nothing would stop the vehicle or return a lidar beam there",
-                p[0], p[1]
-            ),
-        }
-        };
-        if !enclosed(&w.walls, [w.start[0], w.start[1]]) {
-            return Err(outside("the start", [w.start[0], w.start[1]], start_line));
-        }
-        if let Some((k, p)) = w
-            .path
-            .iter()
-            .enumerate()
-            .find(|(_, p)| !enclosed(&w.walls, **p))
-        {
-            return Err(outside(&format!("waypoint {}", k + 1), *p, path_lines[k]));
-        }
+        check_enclosed(&w, start_line, &path_lines)?;
         if w.altitude_m <= 0.0 || w.altitude_m >= w.ceiling_m {
             return Err(whole("altitude must lie between floor and ceiling"));
         }

@@ -3,7 +3,7 @@
 //! dies: coordinates a building can have, one of each once-only statement, and a start (and
 //! survey waypoints) enclosed by walls.
 
-use crate::world::Segment;
+use crate::world::{Segment, World, WorldError};
 
 /// Largest coordinate (and any other number) in a world file, m: 10 km from the origin is far
 /// beyond any building, and keeps every derived grid and distance well inside `f64` precision.
@@ -58,6 +58,36 @@ pub fn enclosed(walls: &[Segment], p: [f64; 2]) -> bool {
         let d = [a.cos(), a.sin()];
         walls.iter().any(|s| ray_hits(p, d, s))
     })
+}
+
+/// The start and every survey waypoint enclosed by walls, or an error naming the line that
+/// placed the first one that is not.
+pub fn check_enclosed(
+    w: &World,
+    start_line: usize,
+    path_lines: &[usize],
+) -> Result<(), WorldError> {
+    let outside = |what: String, p: [f64; 2], line: usize| WorldError {
+        line,
+        reason: format!(
+            "{what} ({}, {}) is not enclosed by walls: some directions from it meet no wall, so \
+             nothing would stop the vehicle or return a lidar beam there",
+            p[0], p[1]
+        ),
+    };
+    let start = [w.start[0], w.start[1]];
+    if !enclosed(&w.walls, start) {
+        return Err(outside("the start".into(), start, start_line));
+    }
+    match w
+        .path
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !enclosed(&w.walls, **p))
+    {
+        Some((k, p)) => Err(outside(format!("waypoint {}", k + 1), *p, path_lines[k])),
+        None => Ok(()),
+    }
 }
 
 fn ray_hits(p: [f64; 2], d: [f64; 2], s: &Segment) -> bool {
