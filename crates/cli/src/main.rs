@@ -9,10 +9,7 @@ mod numeric;
 mod odometry_cmd;
 mod plot;
 mod report;
-mod sim_closed_loop;
-mod sim_cmd;
-mod sim_plot;
-mod sim_world;
+mod sim;
 
 #[derive(Parser)]
 #[command(
@@ -34,7 +31,7 @@ enum Command {
     /// Lidar devices: decode raw captures, record from a serial port, plot a revolution.
     Lidar(lidar_cmd::LidarArgs),
     /// Fly the simulator: emulated lidar/IMU/sonar logs with exact ground truth.
-    Sim(sim_cmd::SimArgs),
+    Sim(sim::SimArgs),
 }
 
 fn main() -> ExitCode {
@@ -43,7 +40,7 @@ fn main() -> ExitCode {
         Command::Odometry(args) => odometry_cmd::run(args),
         Command::Eval(args) => eval_cmd::run(args),
         Command::Lidar(args) => lidar_cmd::run(args),
-        Command::Sim(args) => sim_cmd::run(args),
+        Command::Sim(args) => sim::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

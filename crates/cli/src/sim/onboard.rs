@@ -1,12 +1,12 @@
 //! The onboard stack's side of `plumbline sim`: the options of the scenarios it flies, what it
 //! did in the summary (modes, failsafe, motor jitter, the push's score), and its plots.
 
+use super::plot::{stacked_panels, Line};
 use crate::report::CliError;
-use crate::sim_plot::{stacked_panels, Line};
 use clap::Args;
 use plotters::prelude::*;
 use plumbline_core::msgs::{FailsafeReason, FlightMode};
-use plumbline_sim::onboard_link::FlightLog;
+use plumbline_sim::runner::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
 use plumbline_sim::scenario::score::OnboardScore;
 use plumbline_sim::scenario::{Controller, Options, Tuning};
@@ -107,7 +107,7 @@ pub fn extend_summary(
 
 /// `position_error.png` (seed 000 Fig. 9: Δx, Δy from the hold point, driven back to zero
 /// after the push) and `motors.png` (the four motor commands). Altitude, roll, pitch, battery
-/// and the top view are `sim_cmd`'s `flight.png` and `top.png`.
+/// and the top view are the command's `flight.png` and `top.png`.
 pub fn plots(
     dir: &Path,
     config: &SimConfig,

@@ -2,7 +2,7 @@
 //! gathered along a logged trajectory. Walls are the boundaries between occupied and free
 //! cells, merged into straight runs so a building becomes thousands of walls, not millions.
 
-use crate::world::{Segment, WorldError};
+use crate::world::{Segment, World, WorldError};
 
 /// Most cells a rasterised grid may have: 16 million (64 MB of hit counts), 400 m x 400 m at
 /// 0.1 m. Larger extents come from bad poses, not from buildings.
@@ -229,6 +229,31 @@ impl Occupancy {
             }
         }
         walls
+    }
+}
+
+/// Grids become worlds here, not in `world`, so that the world format does not depend on the
+/// grid (the grid's wall tracing uses the world's segments).
+impl World {
+    /// A world whose walls outline an occupancy grid's occupied cells.
+    pub fn from_occupancy(
+        name: &str,
+        grid: &Occupancy,
+        start: [f64; 3],
+        path: Vec<[f64; 2]>,
+        altitude_m: f64,
+        ceiling_m: f64,
+    ) -> World {
+        World {
+            name: name.into(),
+            ceiling_m,
+            start,
+            walls: grid.walls(),
+            blocks: Vec::new(),
+            path,
+            altitude_m,
+            walkers: Vec::new(),
+        }
     }
 }
 

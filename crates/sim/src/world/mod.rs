@@ -1,10 +1,21 @@
-//! Indoor worlds: wall segments extruded from the floor (z = 0) to the ceiling, a take-off point,
-//! a survey path and walking people. Parsed from the small line format documented in
-//! `crates/sim/WORLDS.md`; the shipped worlds live in `crates/sim/worlds/`.
+//! The world and its geometry: what the vehicle flies in and what its sensors see.
+//!
+//! - this module: indoor worlds, wall segments extruded from the floor (z = 0) to the ceiling,
+//!   a take-off point, a survey path and walking people, parsed from the small line format
+//!   documented in `crates/sim/WORLDS.md` (the shipped worlds live in `crates/sim/worlds/`);
+//! - [`occupancy`]: occupancy grids (a map image) and worlds traced from them;
+//! - [`scene`]: the world as ray-casting geometry for the lidar and the sonar;
+//! - [`nearby`]: the walls near a point, gathered once for many rays;
+//! - [`clearance`]: the distance from the vehicle to the nearest wall, for crash checks.
+
+pub mod check;
+pub mod clearance;
+pub mod nearby;
+pub mod occupancy;
+pub mod scene;
 
 use crate::math::Vec3;
-use crate::occupancy::Occupancy;
-use crate::world_check::{check_enclosed, world_number, OnceOnly};
+use check::{check_enclosed, world_number, OnceOnly};
 
 /// A wall from `a` to `b` (world x, y in metres), floor to ceiling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,10 +110,10 @@ impl std::error::Error for WorldError {}
 
 /// The shipped worlds, by name.
 pub const SHIPPED: &[(&str, &str)] = &[
-    ("room", include_str!("../worlds/room.world")),
-    ("office", include_str!("../worlds/office.world")),
-    ("building", include_str!("../worlds/building.world")),
-    ("intel", include_str!("../worlds/intel.world")),
+    ("room", include_str!("../../worlds/room.world")),
+    ("office", include_str!("../../worlds/office.world")),
+    ("building", include_str!("../../worlds/building.world")),
+    ("intel", include_str!("../../worlds/intel.world")),
 ];
 
 fn closed_loop(points: &[[f64; 2]]) -> impl Iterator<Item = Segment> + '_ {
@@ -248,27 +259,6 @@ impl World {
             return Err(whole("altitude must lie between floor and ceiling"));
         }
         Ok(w)
-    }
-
-    /// A world whose walls outline an occupancy grid's occupied cells.
-    pub fn from_occupancy(
-        name: &str,
-        grid: &Occupancy,
-        start: [f64; 3],
-        path: Vec<[f64; 2]>,
-        altitude_m: f64,
-        ceiling_m: f64,
-    ) -> World {
-        World {
-            name: name.into(),
-            ceiling_m,
-            start,
-            walls: grid.walls(),
-            blocks: Vec::new(),
-            path,
-            altitude_m,
-            walkers: Vec::new(),
-        }
     }
 
     /// The world in the line format of `WORLDS.md` (walls as `wall` lines; blocks become plain

@@ -3,7 +3,7 @@
 //! dies: coordinates a building can have, one of each once-only statement, and a start (and
 //! survey waypoints) enclosed by walls.
 
-use crate::world::{Segment, World, WorldError};
+use super::{Segment, World, WorldError};
 
 /// Largest coordinate (and any other number) in a world file, m: 10 km from the origin is far
 /// beyond any building, and keeps every derived grid and distance well inside `f64` precision.

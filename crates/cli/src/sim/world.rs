@@ -3,8 +3,9 @@
 
 use crate::report::CliError;
 use plumbline_io::carmen::{CarmenLog, OdomPose};
-use plumbline_sim::occupancy::Occupancy;
-use plumbline_sim::scene::Scene;
+use plumbline_io::output;
+use plumbline_sim::world::occupancy::Occupancy;
+use plumbline_sim::world::scene::Scene;
 use plumbline_sim::world::World;
 use std::path::Path;
 
@@ -186,10 +187,9 @@ fn drone_path(scene: &Scene, poses: &[plumbline_io::carmen::OdomPose]) -> Vec<[f
 
 /// Writes `NAME.world`, `NAME.pgm` and `NAME.yaml` into `dir`.
 pub fn write_world(dir: &Path, world: &World, grid: &Occupancy) -> Result<(), CliError> {
-    std::fs::create_dir_all(dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
     let write = |ext: &str, bytes: &[u8]| {
         let path = dir.join(format!("{}.{ext}", world.name));
-        std::fs::write(&path, bytes).map_err(|e| CliError(format!("{}: {e}", path.display())))
+        output::write(&path, bytes).map_err(CliError::from)
     };
     write("world", world.to_text().as_bytes())?;
     write("pgm", &grid.to_pgm())?;
