@@ -1,6 +1,7 @@
 //! `plumbline odometry LOG`: lidar-only scan-to-scan odometry over a log (DESIGN.md §4).
 
 use crate::log_args::LogArgs;
+use crate::numeric::{within, Range};
 use crate::plot::plot_trajectory;
 use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::Args;
@@ -38,11 +39,13 @@ pub struct OdometryArgs {
     /// Draw the trajectory over the scan points into this PNG.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// New keyframe after this much travel, m.
-    #[arg(long, default_value_t = OdometryConfig::default().keyframe_distance_m)]
+    /// New keyframe after this much travel, m. Valid range: (0, 10].
+    #[arg(long, default_value_t = OdometryConfig::default().keyframe_distance_m,
+          value_parser = within::<f32>(Range::above(0.0, 10.0)))]
     pub keyframe_distance: f32,
-    /// New keyframe after this much turning, degrees.
-    #[arg(long, default_value_t = OdometryConfig::default().keyframe_angle_rad.to_degrees())]
+    /// New keyframe after this much turning, degrees. Valid range: (0, 180].
+    #[arg(long, default_value_t = OdometryConfig::default().keyframe_angle_rad.to_degrees(),
+          value_parser = within::<f32>(Range::above(0.0, 180.0)))]
     pub keyframe_angle_deg: f32,
     /// Do not align keyframes with the local map of the walls seen so far: plain
     /// scan-to-keyframe odometry, which drifts more (BENCHMARKS.md).
@@ -52,14 +55,17 @@ pub struct OdometryArgs {
     /// (what takes the drift out at the end of a loop).
     #[arg(long)]
     pub no_relocalize: bool,
-    /// Local map cell edge, m.
-    #[arg(long, default_value_t = LineMapConfig::default().cell_m)]
+    /// Local map cell edge, m. Valid range: [0.01, 10].
+    #[arg(long, default_value_t = LineMapConfig::default().cell_m,
+          value_parser = within::<f32>(Range::closed(0.01, 10.0)))]
     pub map_cell: f32,
     /// Local map width, m (rounded to whole cells; the map rolls along with the vehicle).
-    #[arg(long, default_value_t = 64.0)]
+    /// Valid range: (0, 10000], and at most 2048 cells a side.
+    #[arg(long, default_value_t = 64.0, value_parser = within::<f32>(Range::above(0.0, 10000.0)))]
     pub map_size: f32,
-    /// Weight of the scan match against the map when aligning a keyframe.
-    #[arg(long, default_value_t = RefineConfig::default().matcher_weight)]
+    /// Weight of the scan match against the map when aligning a keyframe. Valid range: [0, 100].
+    #[arg(long, default_value_t = RefineConfig::default().matcher_weight,
+          value_parser = within::<f32>(Range::closed(0.0, 100.0)))]
     pub map_matcher_weight: f32,
     #[command(flatten)]
     pub log_args: LogArgs,
@@ -88,7 +94,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
     };
     let use_map = !args.no_local_map;
     let side = if use_map {
-        map_side(args.map_size, args.map_cell, args.map_matcher_weight)?
+        map_side(args.map_size, args.map_cell)?
     } else {
         0
     };
@@ -113,6 +119,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
     let mut first_failure: Option<String> = None;
     let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
     let mut previous_odom: Option<OdomPose> = None;
+    let mut lost = LostTally::default();
     for (i, rec) in log.scans.iter().enumerate() {
         *scan = rec.to_scan().map_err(|_| {
             CliError(format!(
@@ -159,10 +166,13 @@ pub fn run(args: OdometryArgs) -> CliResult {
                 });
             }
         }
+        let predicted = matches!(step, OdometryStep::Predicted { .. });
+        lost.note(rec.timestamp_s, predicted);
         trajectory.push(TrajectoryPoint {
             timestamp_text: rec.timestamp_text.clone(),
             timestamp_s: rec.timestamp_s,
             pose: OdomPose::from_f32(odometry.pose()),
+            lost: predicted,
         });
         bar.inc(1);
     }
@@ -170,6 +180,13 @@ pub fn run(args: OdometryArgs) -> CliResult {
     if let Some(f) = &first_failure {
         eprintln!(
             "plumbline: {failed} match(es) failed and were bridged by prediction; first: {f}"
+        );
+    }
+    if lost.scans > 0 {
+        eprintln!(
+            "plumbline: no measurement for {:.2} s in {} interval(s) ({} scans): their poses are a decaying \
+             prediction, marked by `# lost` lines in the trajectory and not scored by `eval`",
+            lost.seconds, lost.intervals, lost.scans
         );
     }
     if let Some(path) = &args.out {
@@ -186,6 +203,9 @@ pub fn run(args: OdometryArgs) -> CliResult {
         "median_match_us": percentile(&times_us, 0.5),
         "p99_match_us": percentile(&times_us, 0.99),
         "failed_matches": failed,
+        "lost_scans": lost.scans,
+        "lost_intervals": lost.intervals,
+        "lost_s": lost.seconds,
         "keyframes": keyframes,
         "degenerate_matches": degenerate,
         "rejected_points": rejected,
@@ -204,27 +224,44 @@ pub fn run(args: OdometryArgs) -> CliResult {
     Ok(())
 }
 
-/// Cells per side of the local map, after checking the map options make sense.
-fn map_side(size_m: f32, cell_m: f32, matcher_weight: f32) -> Result<usize, CliError> {
+/// Cells per side of the local map: each option is in its range already (checked while parsing),
+/// but together they can still ask for more memory than any map needs.
+fn map_side(size_m: f32, cell_m: f32) -> Result<usize, CliError> {
     /// 4 million cells, about 200 MB: past this a typo is likelier than a wish.
     const MAX_SIDE: f32 = 2048.0;
-    if !(cell_m.is_finite() && cell_m > 0.0) {
-        return Err(CliError(format!(
-            "--map-cell {cell_m}: must be a positive length in m"
-        )));
-    }
     let side = (size_m / cell_m).ceil();
-    if !(size_m.is_finite() && size_m > 0.0 && side <= MAX_SIDE) {
+    if side > MAX_SIDE {
         return Err(CliError(format!(
-            "--map-size {size_m}: must be positive and at most {MAX_SIDE} cells of {cell_m} m"
-        )));
-    }
-    if !(matcher_weight.is_finite() && matcher_weight >= 0.0) {
-        return Err(CliError(format!(
-            "--map-matcher-weight {matcher_weight}: must be zero or positive"
+            "--map-size {size_m}: at most {MAX_SIDE} cells of {cell_m} m a side (a smaller map or larger --map-cell)"
         )));
     }
     Ok(side as usize)
+}
+
+/// How long the odometry went without a measurement: the time from the last measured scan to
+/// the last scan of each run of predicted ones.
+#[derive(Default)]
+struct LostTally {
+    scans: usize,
+    intervals: usize,
+    seconds: f64,
+    previous: Option<(f64, bool)>,
+}
+
+impl LostTally {
+    fn note(&mut self, stamp_s: f64, predicted: bool) {
+        if predicted {
+            self.scans += 1;
+            let (was_lost, dt) = match self.previous {
+                Some((t, was_lost)) => (was_lost, stamp_s - t),
+                None => (false, 0.0),
+            };
+            self.intervals += !was_lost as usize;
+            // Stamps that go backwards are counted and reported by the reader; they add nothing.
+            self.seconds += dt.max(0.0);
+        }
+        self.previous = Some((stamp_s, predicted));
+    }
 }
 
 /// Scan-to-keyframe odometry, with or without the local map.

@@ -1,6 +1,7 @@
 //! `plumbline lidar decode --device D CAPTURE [--out LOG]`.
 
-use super::{read_capture, require_frames, summary_json, write_log};
+use super::{read_capture, require_frames, summary_json, write_log, BAUD_RANGE};
+use crate::numeric::within;
 use crate::report::{print_summary, CliResult};
 use clap::Args;
 use plumbline_io::serial::{decode_capture, Device};
@@ -18,7 +19,8 @@ pub struct DecodeArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Line speed the capture was taken at; stamps scans by byte position (default: the device's).
-    #[arg(long)]
+    /// Valid range: [1200, 4000000].
+    #[arg(long, value_parser = within::<u32>(BAUD_RANGE))]
     baud: Option<u32>,
     /// Print the summary as one JSON object.
     #[arg(long)]

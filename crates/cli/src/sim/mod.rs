@@ -8,6 +8,7 @@ mod plot;
 mod world;
 
 use crate::log_args::LogArgs;
+use crate::numeric::{within, Range};
 use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::builder::{PossibleValue, PossibleValuesParser};
 use clap::Args;
@@ -15,7 +16,7 @@ use outputs::{Collector, SensorLogs};
 use plumbline_io::output;
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
-use plumbline_sim::runner::{SetupError, SimConfig, Status};
+use plumbline_sim::runner::{SetupError, SimConfig, Status, PHYSICS_HZ_RANGE};
 use plumbline_sim::scenario::{self, Report, ScenarioError};
 use plumbline_sim::sensors::lidar::LidarProfile;
 use plumbline_sim::vehicle::VehicleParams;
@@ -41,13 +42,14 @@ pub struct SimArgs {
     #[arg(long, default_value = "f450")]
     pub vehicle: String,
     /// Run length of the closed-loop scenarios (default 60) and of the test pilot's `hold`;
-    /// an upper bound on the flight for `survey`, s.
-    #[arg(long)]
+    /// an upper bound on the flight for `survey`, s. Valid range: (0, 86400].
+    #[arg(long, value_parser = within::<f64>(Range::above(0.0, 86400.0)))]
     pub duration: Option<f64>,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Physics rate, Hz (fixed-step RK4).
-    #[arg(long, default_value_t = 1000.0)]
+    /// Physics rate, Hz (fixed-step RK4). Valid range: [100, 20000].
+    #[arg(long, default_value_t = 1000.0, value_parser = within::<f64>(
+        Range::closed(*PHYSICS_HZ_RANGE.start(), *PHYSICS_HZ_RANGE.end())))]
     pub physics_hz: f64,
     /// Turn off turbulence.
     #[arg(long)]
@@ -88,7 +90,7 @@ fn parse_push(s: &str) -> Result<Push, String> {
         .collect::<Result<_, _>>()?;
     match v[..] {
         [start_s, duration_s, fx, fy, fz]
-            if v.iter().all(|x| x.is_finite()) && duration_s >= 0.0 =>
+            if v.iter().all(|x| x.is_finite()) && start_s >= 0.0 && duration_s >= 0.0 =>
         {
             Ok(Push {
                 start_s,
@@ -96,7 +98,10 @@ fn parse_push(s: &str) -> Result<Push, String> {
                 force_n: Vec3::new(fx, fy, fz),
             })
         }
-        _ => Err("expected START,DURATION,FX,FY,FZ (five finite numbers, duration >= 0)".into()),
+        _ => Err(
+            "expected START,DURATION,FX,FY,FZ (five finite numbers, start and duration >= 0)"
+                .into(),
+        ),
     }
 }
 
@@ -178,7 +183,7 @@ fn rasterize(args: &SimArgs, log_path: &Path) -> CliResult {
         .unwrap_or("log")
         .trim_end_matches("-corrected")
         .to_string();
-    let (world, grid) = world::rasterize(&log, &name)?;
+    let (world, grid) = world::rasterize(&log, &log_path.display().to_string(), &name)?;
     world::write_world(dir, &world, &grid)?;
     let [x0, y0, x1, y1] = world.bounds();
     let summary = json!({

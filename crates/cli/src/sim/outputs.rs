@@ -94,6 +94,7 @@ impl SensorLogs {
             timestamp_s: scan.stamp_s,
             pose: OdomPose::new(p.x, p.y, truth.attitude.yaw() + 0.0),
             timestamp_text: rec.timestamp_text,
+            lost: false, // ground truth is never predicted
         };
         self.poses.push(*truth);
         write_trajectory(&mut self.truth, &[point])

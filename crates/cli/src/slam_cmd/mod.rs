@@ -9,7 +9,6 @@ use crate::log_args::LogArgs;
 use crate::odometry_cmd::{percentile, MAX_BEAMS};
 use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::Args;
-use plumbline_core::geom::Pose2;
 use plumbline_core::scan::Scan;
 use plumbline_io::carmen::OdomPose;
 use plumbline_slam::map_files::check_writable;
@@ -69,7 +68,7 @@ pub fn run(args: SlamArgs) -> CliResult {
     let mut slam: Slam<MAX_BEAMS> =
         Slam::new(config, &mut cells, true).map_err(|e| CliError(e.0))?;
     let bar = progress(log.scans.len() as u64, "slam");
-    let mut anchors: Vec<(Option<usize>, Pose2)> = Vec::with_capacity(log.scans.len());
+    let mut anchors: Vec<outputs::Anchor> = Vec::with_capacity(log.scans.len());
     let mut times_us = Vec::with_capacity(log.scans.len());
     let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
     let mut previous_odom: Option<OdomPose> = None;
@@ -92,7 +91,11 @@ pub fn run(args: SlamArgs) -> CliResult {
         let start = Instant::now();
         let out = slam.add_scan(&scan, prior);
         times_us.push(start.elapsed().as_secs_f64() * 1e6);
-        anchors.push((out.keyframe, out.relative));
+        anchors.push(outputs::Anchor {
+            keyframe: out.keyframe,
+            relative: out.relative,
+            lost: out.predicted,
+        });
         // The time since the last scan counts as lost when this scan could not be matched.
         if out.predicted {
             lost_s += previous_stamp.map_or(0.0, |p| (rec.timestamp_s - p).abs());

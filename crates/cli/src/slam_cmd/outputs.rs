@@ -23,22 +23,34 @@ pub struct Written {
     pub grid: Option<OccupancyGrid>,
 }
 
+/// Where a scan sits in the graph: its keyframe (if any yet), its pose relative to it, and
+/// whether that pose is a prediction (the match failed).
+#[derive(Clone, Copy, Debug)]
+pub struct Anchor {
+    pub keyframe: Option<usize>,
+    pub relative: Pose2,
+    pub lost: bool,
+}
+
 /// Every scan's final pose: its keyframe's optimised pose composed with the tracked motion from
-/// that keyframe (scans before the first keyframe keep the tracker's pose).
+/// that keyframe (scans before the first keyframe keep the tracker's pose). Predicted poses are
+/// marked lost, so the trajectory file says which poses are not measurements.
 pub fn trajectory(
     scans: &[LaserRecord],
-    anchors: &[(Option<usize>, Pose2)],
+    anchors: &[Anchor],
     keyframe_poses: &[Pose2],
 ) -> Vec<TrajectoryPoint> {
     scans
         .iter()
         .zip(anchors)
-        .map(|(rec, &(keyframe, relative))| TrajectoryPoint {
+        .map(|(rec, a)| TrajectoryPoint {
             timestamp_text: rec.timestamp_text.clone(),
             timestamp_s: rec.timestamp_s,
             pose: OdomPose::from_f32(
-                keyframe.map_or(relative, |k| keyframe_poses[k].compose(relative)),
+                a.keyframe
+                    .map_or(a.relative, |k| keyframe_poses[k].compose(a.relative)),
             ),
+            lost: a.lost,
         })
         .collect()
 }

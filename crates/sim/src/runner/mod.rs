@@ -18,7 +18,7 @@ mod report;
 mod software;
 pub mod truth;
 
-pub use config::{SetupError, SimConfig};
+pub use config::{SetupError, SimConfig, PHYSICS_HZ_RANGE};
 pub use report::{
     Discard, Outcome, Recorder, StateSample, Status, TruthPose, CLEARANCE_CAP_M, STATE_RATE_HZ,
 };

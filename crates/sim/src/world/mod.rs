@@ -8,12 +8,14 @@
 //! - [`nearby`]: the walls near a point, gathered once for many rays;
 //! - [`clearance`]: the distance from the vehicle to the nearest wall, for crash checks.
 
+pub mod check;
 pub mod clearance;
 pub mod nearby;
 pub mod occupancy;
 pub mod scene;
 
 use crate::math::Vec3;
+use check::{check_enclosed, world_number, OnceOnly};
 
 /// A wall from `a` to `b` (world x, y in metres), floor to ceiling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -143,24 +145,22 @@ impl World {
             altitude_m: 1.0,
             walkers: Vec::new(),
         };
-        let mut have_start = false;
+        let mut start_line = None;
+        let mut path_lines = Vec::new();
+        let mut once = OnceOnly::default();
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let err = |reason: String| WorldError { line, reason };
             let content = raw.split('#').next().unwrap_or("").trim();
             let mut words = content.split_whitespace();
             let Some(key) = words.next() else { continue };
+            once.note(key, line).map_err(err)?;
             if key == "name" {
                 w.name = words.collect::<Vec<_>>().join(" ");
                 continue;
             }
             let nums = words
-                .map(|s| {
-                    s.parse::<f64>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .ok_or_else(|| err(format!("`{s}` is not a finite number")))
-                })
+                .map(|s| world_number(s).map_err(err))
                 .collect::<Result<Vec<f64>, _>>()?;
             let want = |n: usize| {
                 if nums.len() == n {
@@ -197,7 +197,7 @@ impl World {
                 "start" => {
                     want(3)?;
                     w.start = [nums[0], nums[1], nums[2]];
-                    have_start = true;
+                    start_line = Some(line);
                 }
                 "wall" => {
                     want(4)?;
@@ -228,6 +228,7 @@ impl World {
                 "path" => {
                     want_points(1)?;
                     w.path.extend(points(&nums));
+                    path_lines.resize(w.path.len(), line);
                 }
                 "person" => {
                     want(5)?;
@@ -250,9 +251,10 @@ impl World {
         if w.walls.is_empty() {
             return Err(whole("world has no walls"));
         }
-        if !have_start {
+        let Some(start_line) = start_line else {
             return Err(whole("world has no `start` line"));
-        }
+        };
+        check_enclosed(&w, start_line, &path_lines)?;
         if w.altitude_m <= 0.0 || w.altitude_m >= w.ceiling_m {
             return Err(whole("altitude must lie between floor and ceiling"));
         }

@@ -301,8 +301,9 @@ mod tests {
         let got = near.cast(&scene, o, d, 30.0, &[]);
         assert!(near.use_grid);
         assert_eq!(got, scene.cast(o, d, 30.0, &[]));
-        // A hundred small rooms, 200 walls all within 30 m: too many per sector.
-        let mut text = String::from("start 2 2 0\n");
+        // A hundred small rooms, 200 walls all within 30 m: too many per sector (inside an
+        // outline, as a world must enclose its start).
+        let mut text = String::from("start 2 2 0\noutline -1 -1 41 -1 41 41 -1 41\n");
         for i in 0..10 {
             for j in 0..10 {
                 let (x, y) = (i as f64 * 4.0, j as f64 * 4.0);
