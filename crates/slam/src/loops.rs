@@ -182,9 +182,11 @@ impl<const N: usize> LoopCloser<N> {
             let into_from = poses[from].between(poses[k]);
             reference.extend(keyframes[k].points().map(|p| into_from.transform(p)));
         }
-        let current: Vec<Vec2> = keyframes[to].points().collect();
-        // Only reference points the current scan can land on matter: the grid covers the
-        // scan's extent at the guess, grown by the window, not every far wall of the reference.
+        // Only points the search scores (within its range) and reference points they can land
+        // on matter: the grid covers that extent at the guess, grown by the window, not every
+        // far wall either scan saw down a corridor.
+        let range = cfg.correlative.max_range_m;
+        let current: Vec<Vec2> = keyframes[to].points().filter(|p| p.norm() <= range).collect();
         let (lo, hi) = bounds(current.iter().map(|&p| guess.transform(p)));
         let travelled = (keyframes[to].path_m - keyframes[from].path_m).abs();
         let window = Window {
