@@ -155,7 +155,10 @@ fn a_blind_stretch_is_reported_as_lost_and_never_turns_into_nan() {
     assert!(p.iter().flatten().all(|v| v.is_finite()));
     // The predicted poses are marked in the file, so no consumer takes them for measurements.
     let text = std::fs::read_to_string(&traj).unwrap();
-    assert!(text.lines().any(|l| l.starts_with("# lost ")), "no lost interval marked");
+    assert!(
+        text.lines().any(|l| l.starts_with("# lost ")),
+        "no lost interval marked"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -186,7 +186,10 @@ impl<const N: usize> LoopCloser<N> {
         // on matter: the grid covers that extent at the guess, grown by the window, not every
         // far wall either scan saw down a corridor.
         let range = cfg.correlative.max_range_m;
-        let current: Vec<Vec2> = keyframes[to].points().filter(|p| p.norm() <= range).collect();
+        let current: Vec<Vec2> = keyframes[to]
+            .points()
+            .filter(|p| p.norm() <= range)
+            .collect();
         let (lo, hi) = bounds(current.iter().map(|&p| guess.transform(p)));
         let travelled = (keyframes[to].path_m - keyframes[from].path_m).abs();
         let window = Window {
