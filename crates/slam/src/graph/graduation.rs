@@ -18,9 +18,9 @@
 //! graph comes to agree with it. When every other loop already agrees (the usual warm-started
 //! call) there is a single stage.
 
+use super::config::OptimizeConfig;
 use super::edge::EdgeKind;
 use super::kernel::LoopKernel;
-use super::optimize::OptimizeConfig;
 use super::pose_graph::PoseGraph;
 use super::residual::{chi2, linearize};
 

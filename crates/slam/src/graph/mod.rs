@@ -2,6 +2,7 @@
 //! by sparse Levenberg-Marquardt with a robust kernel on loops, and read and written as g2o
 //! text so other tools (g2o_viewer, the Freiburg datasets) can exchange graphs with it.
 
+mod config;
 mod edge;
 mod g2o;
 mod graduation;
@@ -13,9 +14,10 @@ mod pose_graph;
 mod residual;
 mod solver;
 
+pub use config::OptimizeConfig;
 pub use edge::{diagonal_information, Edge, EdgeId, EdgeKind, GraphError, Information, NodeId};
 pub use g2o::{read_g2o, write_g2o, G2oError, G2oErrorKind};
 pub use kernel::LoopKernel;
-pub use optimize::{OptimizeConfig, OptimizeReport, StopReason};
+pub use optimize::{OptimizeReport, StopReason};
 pub use pose::Pose2d;
 pub use pose_graph::PoseGraph;

@@ -12,6 +12,7 @@
 //! usually needs only a few iterations. A call on a graph that has not changed since its last
 //! converged optimisation (same settings) returns at once.
 
+use super::config::OptimizeConfig;
 use super::edge::{EdgeId, EdgeKind, NodeId};
 use super::graduation::{edge_kernels, stage_kernels, worst_undecided_chi2};
 use super::kernel::LoopKernel;
@@ -24,35 +25,6 @@ use std::time::{Duration, Instant};
 
 /// Initial Marquardt damping: small, because a warm-started graph is near its optimum.
 const INITIAL_LAMBDA: f64 = 1e-5;
-
-/// Optimiser settings; the defaults suit graphs of keyframes a few decimetres apart.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct OptimizeConfig {
-    /// Upper bound on linearise-and-solve iterations (accepted steps).
-    pub max_iterations: usize,
-    /// Stop when a step lowers the cost by less than this fraction of it.
-    pub relative_tolerance: f64,
-    /// Kernel on loop edges; odometry edges are always plain least squares.
-    pub loop_kernel: LoopKernel,
-    /// A loop edge whose final weight is below this is reported as down-weighted (rejected).
-    pub downweighted_below: f64,
-    /// Graduated non-convexity: the kernel threshold starts above every loop's error and is
-    /// divided by this factor each stage down to the kernel's own (see `super::graduation`).
-    /// None runs the kernel as it is from the start.
-    pub graduation_step: Option<f64>,
-}
-
-impl Default for OptimizeConfig {
-    fn default() -> Self {
-        Self {
-            max_iterations: 30,
-            relative_tolerance: 1e-6,
-            loop_kernel: LoopKernel::Dcs { phi: 5.0 },
-            downweighted_below: 0.1,
-            graduation_step: Some(2.0),
-        }
-    }
-}
 
 /// Why the optimiser stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

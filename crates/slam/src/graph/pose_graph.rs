@@ -24,7 +24,7 @@ pub struct PoseGraph {
     rejected: Vec<bool>,
     /// The settings of the last optimisation if it converged and no edge, pose or fixed flag
     /// has changed since: optimising again with them would find the same poses.
-    pub(super) settled: Option<super::optimize::OptimizeConfig>,
+    pub(super) settled: Option<super::config::OptimizeConfig>,
 }
 
 impl PoseGraph {
