@@ -1,9 +1,11 @@
 //! Files and devices around `plumbline-core`: CARMEN logs, relations, trajectories and the
-//! relations metric.
+//! relations metric; the one way every command opens its inputs and writes its outputs.
 #![forbid(unsafe_code)]
 
 pub mod carmen;
 pub mod eval;
+pub mod input;
+pub mod output;
 mod pose_math;
 pub mod relations;
 pub mod serial;

@@ -112,6 +112,25 @@ fn points(nums: &[f64]) -> Vec<[f64; 2]> {
     nums.chunks_exact(2).map(|c| [c[0], c[1]]).collect()
 }
 
+/// Every statement of the world format (`WORLDS.md`).
+const KEYWORDS: &[&str] = &[
+    "name", "ceiling", "altitude", "start", "wall", "outline", "block", "box", "path", "person",
+];
+
+/// Names the unknown word, the closest keyword when one is a likely typo, and all of them.
+fn unknown_keyword(word: &str) -> String {
+    let closest = KEYWORDS
+        .iter()
+        .map(|k| (strsim::damerau_levenshtein(word, k), *k))
+        .min()
+        .filter(|(d, k)| *d <= 2 && *d < k.len());
+    let hint = closest.map_or(String::new(), |(_, k)| format!("; did you mean `{k}`?"));
+    format!(
+        "unknown keyword `{word}`{hint} (a line starts with one of: {})",
+        KEYWORDS.join(", ")
+    )
+}
+
 impl World {
     /// A shipped world by name.
     pub fn shipped(name: &str) -> Option<Result<World, WorldError>> {
@@ -134,6 +153,8 @@ impl World {
             walkers: Vec::new(),
         };
         let mut have_start = false;
+        // Editors on some systems put a byte-order mark in front of UTF-8 text; it is not a word.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let err = |reason: String| WorldError { line, reason };
@@ -143,6 +164,9 @@ impl World {
             if key == "name" {
                 w.name = words.collect::<Vec<_>>().join(" ");
                 continue;
+            }
+            if !KEYWORDS.contains(&key) {
+                return Err(err(unknown_keyword(key)));
             }
             let nums = words
                 .map(|s| {
@@ -230,7 +254,7 @@ impl World {
                         speed_mps: nums[4],
                     });
                 }
-                other => return Err(err(format!("unknown keyword `{other}`"))),
+                other => return Err(err(unknown_keyword(other))),
             }
         }
         let whole = |reason: &str| WorldError {
@@ -431,6 +455,14 @@ mod tests {
             e.to_string().starts_with("line 2:") && e.reason.contains("nan"),
             "{e}"
         );
+        let e = World::parse("start 0 0 0\nnmae my room\n").unwrap_err();
+        assert_eq!(e.line, 2);
+        assert!(
+            e.reason
+                .contains("unknown keyword `nmae`; did you mean `name`?"),
+            "{e}"
+        );
+        assert!(World::parse("\u{feff}start 0 0 0\nwall 0 0 1 0\n").is_ok());
         let e = World::parse("start 0 0 0\nwindow 1 2\n").unwrap_err();
         assert!(e.reason.contains("unknown keyword `window`"), "{e}");
         assert!(World::parse("start 0 0 0\n")

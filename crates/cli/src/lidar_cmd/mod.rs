@@ -7,11 +7,8 @@ mod record;
 
 use crate::report::{CliError, CliResult};
 use clap::{Args, Subcommand};
-use plumbline_io::carmen::write_robotlaser1;
-use plumbline_io::serial::{DecodeSummary, DecodedScan, Device};
+use plumbline_io::serial::{DecodeSummary, Device};
 use serde_json::{json, Map, Value};
-use std::io::Write;
-use std::path::Path;
 
 #[derive(Args)]
 pub struct LidarArgs {
@@ -70,20 +67,4 @@ fn require_frames(what: &str, device: Device, summary: &DecodeSummary) -> CliRes
         )));
     }
     Ok(())
-}
-
-fn write_log(path: &Path, scans: &[DecodedScan]) -> CliResult {
-    let file =
-        std::fs::File::create(path).map_err(|e| CliError(format!("{}: {e}", path.display())))?;
-    let mut w = std::io::BufWriter::new(file);
-    for s in scans {
-        write_robotlaser1(&mut w, &s.record, "plumbline")
-            .map_err(|e| CliError(format!("{}: {e}", path.display())))?;
-    }
-    w.flush()
-        .map_err(|e| CliError(format!("{}: {e}", path.display())))
-}
-
-fn read_capture(path: &Path) -> Result<Vec<u8>, CliError> {
-    std::fs::read(path).map_err(|e| CliError(format!("{}: {e}", path.display())))
 }
