@@ -235,4 +235,44 @@ mod tests {
         assert_eq!((rec.valid[89], rec.ranges_m[89]), (true, 1.09)); // -90 deg: the right
         assert_eq!(scans[0].invalid_beams(), 358);
     }
+
+    /// At most `chunk` bytes a read, as a port delivers them.
+    struct Chunked<'a>(&'a [u8], usize);
+
+    impl Read for Chunked<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            let n = self.0.len().min(buf.len()).min(self.1);
+            buf[..n].copy_from_slice(&self.0[..n]);
+            self.0 = &self.0[n..];
+            Ok(n)
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn chunking_changes_nothing(
+            bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..6000),
+            chunk in 1usize..300,
+            pick in 0usize..4,
+        ) {
+            let device = [Device::Xv11, Device::Xv11Old, Device::Urg, Device::Rplidar][pick];
+            // Valid XV-11 packets spliced in, so whole revolutions occur too.
+            let mut input = std::fs::read(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../data/captures/neato-xv11/hand_in_box.bin"
+            ))
+            .map(|c| c[..4000].to_vec())
+            .unwrap_or_default();
+            input.extend(&bytes);
+            let (whole, a) = decode_capture(device, &input, 115_200).unwrap();
+            let mut streamed = Vec::new();
+            let b = decode_stream(device, Chunked(&input, chunk), "t", 115_200, |s| {
+                streamed.push(s);
+                Ok::<_, CaptureError>(true)
+            })
+            .unwrap();
+            proptest::prop_assert_eq!(whole, streamed);
+            proptest::prop_assert_eq!(a, b);
+        }
+    }
 }
