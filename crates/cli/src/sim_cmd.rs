@@ -10,6 +10,7 @@ use clap::Args;
 use indicatif::ProgressBar;
 use plumbline_core::msgs::{ImuSample, SonarSample};
 use plumbline_io::carmen::{write_robotlaser1, LaserRecord};
+use plumbline_io::input::read_text;
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
 use plumbline_sim::plan::{Plan, PlanLimits};
@@ -104,9 +105,9 @@ fn load_world(arg: &str) -> Result<World, CliError> {
     if arg.ends_with(".pgm") {
         return sim_world::load_pgm(Path::new(arg));
     }
-    let text = std::fs::read_to_string(arg).map_err(|e| {
+    let text = read_text(Path::new(arg)).map_err(|e| {
         CliError(format!(
-            "{arg}: {e} (shipped worlds: room, office, building, intel)"
+            "{e} (shipped worlds: room, office, building, intel)"
         ))
     })?;
     World::parse(&text).map_err(|e| CliError(format!("{arg}: {e}")))
@@ -116,8 +117,8 @@ fn load_vehicle(arg: &str) -> Result<VehicleParams, CliError> {
     if let Some(v) = VehicleParams::preset(arg) {
         return Ok(v);
     }
-    let text = std::fs::read_to_string(arg)
-        .map_err(|e| CliError(format!("{arg}: {e} (presets: f450, pelican)")))?;
+    let text =
+        read_text(Path::new(arg)).map_err(|e| CliError(format!("{e} (presets: f450, pelican)")))?;
     VehicleParams::from_toml(&text).map_err(|e| CliError(format!("{arg}: {e}")))
 }
 

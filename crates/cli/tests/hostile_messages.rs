@@ -95,6 +95,21 @@ fn gzip_is_recognised_by_content_whatever_the_name() {
     assert!(b.status.success(), "{}", stderr(&b));
     assert_eq!(last_json(&a), last_json(&b));
 
+    let room = dir.join("room.txt");
+    std::fs::write(&room, "start 1 1 0\noutline 0 0 6 0 6 4.5 0 4.5\npath 1 1 4 1\n").unwrap();
+    let world = dir.join("room.world");
+    gzip_to(&room, &world);
+    let out = run(&[
+        "sim",
+        "--world",
+        p(&world),
+        "--controller",
+        "test-pilot",
+        "--duration",
+        "1",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+
     let cap = dir.join("capture.bin");
     gzip_to(&capture(), &cap);
     let a = run(&[

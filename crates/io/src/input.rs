@@ -88,6 +88,45 @@ pub fn open_input(path: &Path) -> Result<Input, ReadError> {
     })
 }
 
+/// The largest whole text file [`read_text`] takes: far beyond any world, vehicle or map YAML.
+pub const MAX_TEXT_FILE_BYTES: u64 = 64 << 20;
+
+/// Reads a small text file whole (a world, a vehicle, a map's YAML): gzip by content, a
+/// byte-order mark dropped, and anything that is not UTF-8 text refused with where it stops.
+pub fn read_text(path: &Path) -> Result<String, ReadError> {
+    let input = open_input(path)?;
+    let fail = |message: String| ReadError {
+        file: input.name.clone(),
+        line: 0,
+        message,
+    };
+    let mut bytes = Vec::new();
+    input
+        .reader
+        .take(MAX_TEXT_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| fail(format!("cannot read: {e}")))?;
+    if bytes.len() as u64 > MAX_TEXT_FILE_BYTES {
+        return Err(fail(format!(
+            "larger than {} MiB: not the small text file expected here",
+            MAX_TEXT_FILE_BYTES >> 20
+        )));
+    }
+    let body = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+    match std::str::from_utf8(body) {
+        Ok(text) => Ok(text.to_string()),
+        Err(e) => {
+            let before = &body[..e.valid_up_to()];
+            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+            Err(ReadError {
+                file: input.name.clone(),
+                line,
+                message: "not text: invalid UTF-8 (a binary file?)".into(),
+            })
+        }
+    }
+}
+
 /// Lines of a text file, numbered from 1, each at most [`MAX_LINE_BYTES`], the UTF-8
 /// byte-order mark some editors put in front of the first line removed.
 pub struct TextLines<R> {
@@ -192,6 +231,17 @@ mod tests {
         assert_eq!(err.line, 1);
         assert!(err.message.contains("longer than 8 MiB"), "{err}");
         assert!(t.buf.capacity() <= 2 * MAX_LINE_BYTES + 64);
+    }
+
+    #[test]
+    fn whole_text_drops_the_mark_and_names_the_line_of_bad_bytes() {
+        let path = std::env::temp_dir().join(format!("plumbline-text-{}", std::process::id()));
+        std::fs::write(&path, b"\xEF\xBB\xBFstart 0 0 0\n").unwrap();
+        assert_eq!(read_text(&path).unwrap(), "start 0 0 0\n");
+        std::fs::write(&path, b"a\nb\xFF\n").unwrap();
+        let err = read_text(&path).unwrap_err();
+        assert_eq!(err.line, 2, "{err}");
+        std::fs::remove_file(&path).unwrap();
     }
 
     #[test]
