@@ -176,7 +176,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
                 recovered += result.quality.recovered as usize;
                 iterations += result.quality.iterations as u64;
             }
-            OdometryStep::Predicted { error } => {
+            OdometryStep::Predicted { error, .. } => {
                 failed += 1;
                 first_failure.get_or_insert_with(|| {
                     format!("scan {scans} at {}: {error}", rec.timestamp_text)

@@ -6,6 +6,7 @@ use crate::report::{print_summary, progress, CliError, CliResult};
 use crate::sim_closed_loop;
 use crate::sim_plot;
 use crate::sim_world;
+use clap::builder::{PossibleValue, PossibleValuesParser};
 use clap::Args;
 use indicatif::ProgressBar;
 use plumbline_core::msgs::{ImuSample, SonarSample};
@@ -13,10 +14,8 @@ use plumbline_io::carmen::{write_robotlaser1, LaserRecord};
 use plumbline_io::input::read_text;
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
-use plumbline_sim::plan::{Plan, PlanLimits};
-use plumbline_sim::runner::{
-    self, Outcome, Pilot, Recorder, SimConfig, StateSample, Status, TruthPose,
-};
+use plumbline_sim::runner::{Recorder, SetupError, SimConfig, StateSample, Status, TruthPose};
+use plumbline_sim::scenario::{self, Report, ScenarioError};
 use plumbline_sim::sensors::lidar::{LidarProfile, LidarScan};
 use plumbline_sim::truth::relations;
 use plumbline_sim::vehicle::VehicleParams;
@@ -33,12 +32,8 @@ pub struct SimArgs {
     /// or an occupancy image (map.pgm with map.yaml beside it).
     #[arg(long, default_value = "office")]
     pub world: String,
-    /// What to fly: `survey` (the world's path, test pilot), or issue 4's closed-loop
-    /// scenarios flown by the onboard stack: `hold` (1 m over the start, 2 N push at 20 s),
-    /// `hold-people`, `land-on-low-battery`, `lidar-failure`.
-    #[arg(long, default_value = "survey", value_parser = [
-        "survey", "hold", "hold-people", "land-on-low-battery", "lidar-failure",
-    ])]
+    /// What to fly: `survey` is flown by the test pilot, the others by the onboard stack.
+    #[arg(long, default_value = "survey", value_parser = scenario_names())]
     pub scenario: String,
     #[command(flatten)]
     pub closed_loop: sim_closed_loop::ClosedLoopArgs,
@@ -77,6 +72,15 @@ pub struct SimArgs {
     /// Print the summary as one JSON object.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The catalogue's scenarios, each with its one line of help.
+fn scenario_names() -> PossibleValuesParser {
+    PossibleValuesParser::new(
+        scenario::CATALOGUE
+            .iter()
+            .map(|e| PossibleValue::new(e.name).help(e.about)),
+    )
 }
 
 fn parse_push(s: &str) -> Result<Push, String> {
@@ -250,7 +254,8 @@ fn finish_files(dir: &Path, mut f: Files) -> Result<(), CliError> {
     Ok(())
 }
 
-fn summary(args: &SimArgs, config: &SimConfig, out: &Outcome, wall_s: f64) -> serde_json::Value {
+fn summary(args: &SimArgs, config: &SimConfig, report: &Report, wall_s: f64) -> serde_json::Value {
+    let (out, score) = (&report.outcome, &report.score);
     let (status, status_time) = match &out.status {
         Status::Completed => ("completed".to_string(), None),
         Status::Crashed { t_s, reason } => (format!("crashed: {reason}"), Some(*t_s)),
@@ -273,9 +278,9 @@ fn summary(args: &SimArgs, config: &SimConfig, out: &Outcome, wall_s: f64) -> se
         "realtime_factor": out.sim_seconds / wall_s.max(1e-9),
         "scans": out.scans,
         "distance_flown_m": out.distance_flown_m,
-        "rms_hold_error_m": out.rms_hold_error_m,
-        "max_hold_error_m": out.max_hold_error_m,
-        "estimate_drift_m": null,
+        "rms_hold_error_m": score.hold.map(|h| h.rms_m),
+        "max_hold_error_m": score.hold.map(|h| h.max_m),
+        "estimate_drift_m": score.estimate_drift_m,
         "min_clearance_m": out.min_clearance_m,
         "energy_wh": out.energy.total_wh(),
         "battery_energy_wh": out.battery_energy_wh,
@@ -318,6 +323,30 @@ fn rasterize(args: &SimArgs, log_path: &Path) -> CliResult {
     Ok(())
 }
 
+/// A scenario refused, in the command's own terms.
+fn scenario_error(args: &SimArgs, e: ScenarioError) -> CliError {
+    match e {
+        ScenarioError::Controller {
+            scenario,
+            controller,
+            reason,
+            instead,
+        } => {
+            let c = controller.name();
+            let advice = match instead {
+                Some(i) => format!("use --controller {}", i.name()),
+                None => format!("drop --controller {c}"),
+            };
+            CliError(format!(
+                "--scenario {scenario} --controller {c}: {reason}; {advice}"
+            ))
+        }
+        ScenarioError::World(e) => CliError(format!("{}: {e}", args.world)),
+        ScenarioError::Setup(e @ SetupError::World(_)) => CliError(format!("{}: {e}", args.world)),
+        ScenarioError::Setup(e) => CliError(e.to_string()),
+    }
+}
+
 pub fn run(args: SimArgs) -> CliResult {
     if let Some(log) = args.rasterize.as_deref() {
         return rasterize(&args, log);
@@ -338,41 +367,14 @@ pub fn run(args: SimArgs) -> CliResult {
             return Err(CliError(format!("--duration must be positive, got {d}")));
         }
     }
-    let flight = sim_closed_loop::prepare(
-        &args.scenario,
-        &args.closed_loop,
-        args.duration,
-        &mut config,
-    )?;
-    let (pilot, flight_log, flight_s) = match flight {
-        Some(f) => (f.pilot, Some(f.log), config.max_duration_s),
-        None => {
-            let limits = PlanLimits::default();
-            let plan = match args.scenario.as_str() {
-                "hold" => Plan::hold(&config.world, limits, args.duration.unwrap_or(30.0)),
-                _ => {
-                    if config.world.path.is_empty() {
-                        return Err(CliError(format!(
-                            "world {} has no survey path",
-                            config.world.name
-                        )));
-                    }
-                    config.max_duration_s = args.duration.unwrap_or(config.max_duration_s);
-                    Plan::survey(&config.world, limits)
-                }
-            };
-            let flight_s = plan.duration_s().min(config.max_duration_s);
-            (Pilot::Test(plan), None, flight_s)
-        }
-    };
-    for p in &config.world.path {
-        config
-            .world
-            .check_free(*p, config.vehicle.radius_m, "survey waypoint")
-            .map_err(|e| CliError(format!("{}: {e}", args.world)))?;
-    }
+    let entry = scenario::find(&args.scenario)
+        .ok_or_else(|| CliError(format!("unknown scenario {}", args.scenario)))?;
+    let options = args.closed_loop.options(args.duration);
+    let flight = entry
+        .prepare(&options, &mut config)
+        .map_err(|e| scenario_error(&args, e))?;
     let files = args.out.as_deref().map(open_files).transpose()?;
-    let bar = progress(flight_s.ceil() as u64, "sim");
+    let bar = progress(flight.planned_s.ceil() as u64, "sim");
     let mut collector = Collector {
         files,
         states: Vec::new(),
@@ -380,25 +382,18 @@ pub fn run(args: SimArgs) -> CliResult {
         error: None,
     };
     let started = Instant::now();
-    let out = runner::run(&config, pilot, &mut collector)
+    let report = scenario::fly(&config, flight, &mut collector)
         .map_err(|e| CliError(format!("{}: {e}", args.world)))?;
     let wall_s = started.elapsed().as_secs_f64();
     collector.bar.finish_and_clear();
     if let Some(e) = collector.error.take() {
         return Err(CliError(format!("writing outputs: {e}")));
     }
-    let mut summary = summary(&args, &config, &out, wall_s);
-    if let Some(log) = &flight_log {
-        let log = log.borrow();
-        sim_closed_loop::extend_summary(
-            &mut summary,
-            &args.closed_loop,
-            &config,
-            &log,
-            &collector.states,
-        );
+    let mut summary = summary(&args, &config, &report, wall_s);
+    if let (Some(log), Some(score)) = (&report.onboard, &report.score.onboard) {
+        sim_closed_loop::extend_summary(&mut summary, &args.closed_loop, &config, log, score);
         if let Some(dir) = args.out.as_deref() {
-            sim_closed_loop::plots(dir, &config, &log, &collector.states)?;
+            sim_closed_loop::plots(dir, &config, log, &collector.states)?;
         }
     }
     if let (Some(dir), Some(files)) = (args.out.as_deref(), collector.files.take()) {

@@ -7,6 +7,7 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+mod fast_math;
 pub mod geom;
 pub mod msgs;
 pub mod scan;

@@ -71,15 +71,21 @@ pub struct ScanMatchDelta {
 }
 
 /// The pilot's radio: sticks normalised and switches.
+///
+/// Sticks are signed as on a Mode-2 radio, right (and up, forward) positive, so a pilot's
+/// habits carry over: each stick's doc says which way the vehicle goes in FLU terms.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PilotInput {
-    /// Roll stick, -1 (left) .. 1 (right).
+    /// Roll stick, -1 (left) .. 1 (right). Right banks right: a positive roll about FLU x, the
+    /// vehicle moves to its right (-y).
     pub roll_norm: f32,
-    /// Pitch stick, -1 (back) .. 1 (forward).
+    /// Pitch stick, -1 (back) .. 1 (forward). Forward tips the nose down: a positive pitch
+    /// about FLU y, the vehicle moves forward (+x).
     pub pitch_norm: f32,
-    /// Yaw stick, -1 (clockwise) .. 1 (counter-clockwise).
+    /// Yaw stick, -1 (left) .. 1 (right). Right turns clockwise seen from above: a negative yaw
+    /// rate about FLU z (z up).
     pub yaw_norm: f32,
-    /// Throttle stick, 0 .. 1.
+    /// Throttle stick, 0 .. 1 (collective; up climbs).
     pub throttle_norm: f32,
     /// Arm switch: on arms and (outside manual) takes off; off lands and disarms once down.
     pub arm: bool,

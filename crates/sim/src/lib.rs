@@ -23,6 +23,7 @@ pub mod plan;
 pub mod power;
 pub mod rng;
 pub mod runner;
+pub mod scenario;
 pub mod scene;
 pub mod sensors;
 pub mod truth;

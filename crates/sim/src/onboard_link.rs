@@ -1,6 +1,6 @@
 //! The onboard flight stack of `plumbline-core` ([`Onboard`]: lidar odometry, EKF, cascaded
 //! PID, mixer, modes and failsafes) behind the runner's [`FlightSoftware`] interface, with a
-//! scripted pilot and lidar failure injection (issue 4's scenarios).
+//! scripted pilot's radio and lidar failure injection (what the closed-loop scenarios script).
 //!
 //! The runner consumes the flight software, so what the stack did (modes, failsafes, its
 //! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
@@ -49,10 +49,36 @@ pub fn autopilot_for(v: &VehicleParams) -> AutopilotConfig {
 /// What the pilot and the fault injector do during a run.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Script {
-    /// (time, arm switch) changes; the switch is off before the first one.
-    pub arm: Vec<(f64, bool)>,
+    /// (time, radio state) changes, in time order: the radio holds each state until the next
+    /// one. Before the first the switches are off and the sticks centred.
+    pub radio: Vec<(f64, PilotInput)>,
     /// The lidar stops delivering revolutions from this time on.
     pub lidar_dies_at_s: Option<f64>,
+}
+
+impl Script {
+    /// A pilot who flips the arm switch on at `t_s` and leaves the rest to the autopilot.
+    pub fn arm_at(t_s: f64) -> Self {
+        Self {
+            radio: vec![(
+                t_s,
+                PilotInput {
+                    arm: true,
+                    ..PilotInput::default()
+                },
+            )],
+            lidar_dies_at_s: None,
+        }
+    }
+
+    /// The radio's state at `t_s`.
+    pub fn radio_at(&self, t_s: f64) -> PilotInput {
+        self.radio
+            .iter()
+            .rev()
+            .find(|(t, _)| *t <= t_s)
+            .map_or(PilotInput::default(), |(_, p)| *p)
+    }
 }
 
 /// The onboard outputs at one instant, sampled at the runner's [`STATE_RATE_HZ`] for plots.
@@ -176,13 +202,6 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
         if let Some(s) = frame.imu.last() {
             self.last_imu = *s;
         }
-        let arm = self
-            .script
-            .arm
-            .iter()
-            .rev()
-            .find(|(t, _)| *t <= frame.t_s)
-            .is_some_and(|(_, a)| *a);
         let lidar_alive = self.script.lidar_dies_at_s.is_none_or(|t| frame.t_s < t);
         let scan = match frame.scans.last() {
             Some(s) if lidar_alive => {
@@ -197,10 +216,7 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             sonar: frame.sonar,
             scan_match: None,
             battery: Some(frame.battery),
-            pilot: PilotInput {
-                arm,
-                ..PilotInput::default()
-            },
+            pilot: self.script.radio_at(frame.t_s),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         let mut log = self.log.borrow_mut();

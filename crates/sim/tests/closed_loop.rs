@@ -3,11 +3,12 @@
 //! `FlightSoftware` interface. Seed 000 Fig. 8-9: ICL displacement drives the hold.
 
 use plumbline_core::matching::OdometryConfig;
-use plumbline_core::msgs::{FailsafeReason, FlightMode};
+use plumbline_core::msgs::{FailsafeReason, FlightMode, PilotInput};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
 use plumbline_sim::onboard_link::{autopilot_for, FlightLog, OnboardLink, Script, XV11_BEAMS};
 use plumbline_sim::runner::{run, Pilot, Recorder, SimConfig, StateSample, Status};
+use plumbline_sim::scenario::score::{self, horizontal_error};
 use plumbline_sim::sensors::lidar::LidarProfile;
 use plumbline_sim::world::World;
 
@@ -26,9 +27,18 @@ impl Recorder for Truth {
     }
 }
 
-fn fly(config: &SimConfig, arm: Vec<(f64, bool)>, lidar_dies_at_s: Option<f64>) -> (Status, Log) {
+fn fly(config: &SimConfig, arm: &[(f64, bool)], lidar_dies_at_s: Option<f64>) -> (Status, Log) {
     let script = Script {
-        arm,
+        radio: arm
+            .iter()
+            .map(|&(t, arm)| {
+                let radio = PilotInput {
+                    arm,
+                    ..PilotInput::default()
+                };
+                (t, radio)
+            })
+            .collect(),
         lidar_dies_at_s,
     };
     let (link, log) = OnboardLink::<XV11_BEAMS>::new(
@@ -72,29 +82,24 @@ fn pushed_room(seed: u64, push_s: f64, duration_s: f64) -> SimConfig {
     c
 }
 
-/// Horizontal distance from the start over a time window, (rms, max).
+/// Hold error from the start over a time window, (rms, max).
 fn hold_error(log: &Log, start: [f64; 2], from_s: f64, to_s: f64) -> (f64, f64) {
-    let errs: Vec<f64> = log
-        .truth
-        .iter()
-        .filter(|s| s.t_s >= from_s && s.t_s < to_s)
-        .map(|s| (s.position.x - start[0]).hypot(s.position.y - start[1]))
-        .collect();
-    let rms = (errs.iter().map(|e| e * e).sum::<f64>() / errs.len().max(1) as f64).sqrt();
-    (rms, errs.iter().cloned().fold(0.0, f64::max))
+    let e = score::hold_error(&log.truth, start, |t| t >= from_s && t < to_s)
+        .expect("truth in the window");
+    (e.rms_m, e.max_m)
 }
 
 #[test]
 fn holds_over_the_start_through_a_push_and_lands() {
     let c = pushed_room(11, 15.0, 34.0);
     let start = [c.world.start[0], c.world.start[1]];
-    let (status, log) = fly(&c, vec![(0.5, true), (25.0, false)], None);
+    let (status, log) = fly(&c, &[(0.5, true), (25.0, false)], None);
     println!("modes {:?}", log.onboard.modes);
     assert_eq!(status, Status::Completed);
     let (rms, max) = hold_error(&log, start, 8.0, 15.0);
-    let err = |s: &StateSample| (s.position.x - start[0]).hypot(s.position.y - start[1]);
+    let err = |s: &StateSample| horizontal_error(s.position, start);
     let after_push = || log.truth.iter().filter(|s| s.t_s >= 16.0 && s.t_s < 25.0);
-    // Issue 4's recovery_s: from the end of the push until back within 5 cm.
+    // The summary's recovery_s: from the end of the push until back within 5 cm.
     let recovery_s = after_push().find(|s| err(s) <= 0.05).map(|s| s.t_s - 16.0);
     // Stricter: from the end of the push until it stays within 5 cm for good.
     let settled_s = after_push()
@@ -111,35 +116,33 @@ fn holds_over_the_start_through_a_push_and_lands() {
         recovery_s.is_some_and(|s| s <= 3.0),
         "recovery {recovery_s:?}"
     );
-    // 4-9 s after the push the vehicle is back on station (1.2 cm RMS on this seed). Before
-    // the scan match was fused at mid-revolution, the estimate lagged the post-push swing and
-    // this was 6-13 cm over seeds 20-28.
+    // 4-9 s after the push the vehicle is back on station (1.2 cm RMS on this seed): the scan
+    // match is fused at mid-revolution, so the estimate keeps up with the post-push swing.
     assert!(rms_after < 0.05, "rms after the push {rms_after}");
     let modes: Vec<FlightMode> = log.onboard.modes.iter().map(|m| m.1).collect();
     use FlightMode::*;
     assert_eq!(modes, vec![Disarmed, Takeoff, Hold, Land, Disarmed]);
 }
 
-/// Seed 58 of the hold: a keyframe taken in the fast swing after the push kept that revolution's
-/// smear (0.2 m of travel over the XV-11's turn), and the estimate stayed 10 cm off for the rest
-/// of the flight (hold RMS 9.6 cm, drift 12 cm through the CLI). With the beams de-skewed to
-/// mid-revolution it holds like every other seed.
+/// Seed 58 of the hold takes a keyframe in the fast swing after the push. Without the beams
+/// de-skewed to mid-revolution, that keyframe keeps the revolution's smear (0.2 m of travel over
+/// the XV-11's turn) and the estimate stays 10 cm off for the rest of the flight; with them it
+/// holds like every other seed.
 #[test]
 fn a_keyframe_taken_in_the_swing_after_a_push_does_not_shift_the_hold() {
     let c = pushed_room(58, 20.0, 45.0);
     let start = [c.world.start[0], c.world.start[1]];
-    let (status, log) = fly(&c, vec![(0.5, true)], None);
+    let (status, log) = fly(&c, &[(0.5, true)], None);
     assert_eq!(status, Status::Completed);
     let (rms, max) = hold_error(&log, start, 25.0, 45.0);
     println!("seed 58, 5-25 s after the push: rms {rms:.4} m, max {max:.4} m");
     assert!(rms < 0.04, "rms {rms}");
 }
 
-/// Issue 4's lidar-failure scenario over twenty seeds: the lidar stops 10 s into the flight,
-/// "lidar lost" is raised, the vehicle holds on the IMU for a while, then lands. The room's walls
-/// are 1 m from the start (0.65 m from the vehicle's rim), so the IMU-only flight must stay
-/// close: it used to hit a wall on every seed (the IMU-only estimate strayed 0.4-2.3 m). Seeds
-/// 300-319 were not used in tuning (mean 0.21 m, worst 0.51 m when this was written).
+/// The lidar-failure scenario over twenty seeds: the lidar stops 10 s into the flight, "lidar
+/// lost" is raised, the vehicle holds on the IMU for a while, then lands. The room's walls are
+/// 1 m from the start (0.65 m from the vehicle's rim), so the IMU-only flight must stay close.
+/// Seeds 300-319 were not used in tuning (mean 0.21 m, worst 0.51 m).
 #[test]
 fn twenty_seeds_of_lidar_failure_land_near_where_the_lidar_stopped() {
     const DIES_AT_S: f64 = 10.0;
@@ -147,7 +150,7 @@ fn twenty_seeds_of_lidar_failure_land_near_where_the_lidar_stopped() {
     for seed in 300..320 {
         let mut c = room(seed);
         c.max_duration_s = 15.0;
-        let (status, log) = fly(&c, vec![(0.5, true)], Some(DIES_AT_S));
+        let (status, log) = fly(&c, &[(0.5, true)], Some(DIES_AT_S));
         let at = |t: f64| log.truth.iter().find(|s| s.t_s >= t).or(log.truth.last());
         let (Some(stop), Some(end)) = (at(DIES_AT_S), log.truth.last()) else {
             failures.push((seed, "no truth".to_string()));
@@ -172,15 +175,14 @@ fn twenty_seeds_of_lidar_failure_land_near_where_the_lidar_stopped() {
 }
 
 /// A hundred seeds of the hold with seed 000's push: none may crash, and the hold error before
-/// the push must average well within issue 4's 5 cm (1.65 cm when this was written; 4.5 cm
-/// before the tilt filter's alignment and gyro-bias fixes).
+/// the push must average well within the 5 cm target (1.65 cm measured).
 #[test]
 fn a_hundred_seeds_of_hold_and_push_do_not_crash() {
     let (mut crashes, mut rms_sum, mut flown) = (Vec::new(), 0.0, 0);
     for seed in 100..200 {
         let c = pushed_room(seed, 20.0, 30.0);
         let start = [c.world.start[0], c.world.start[1]];
-        let (status, log) = fly(&c, vec![(0.5, true)], None);
+        let (status, log) = fly(&c, &[(0.5, true)], None);
         if status != Status::Completed {
             crashes.push((seed, status));
             continue;

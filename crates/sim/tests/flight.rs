@@ -8,6 +8,7 @@ use plumbline_sim::plan::{Plan, PlanLimits};
 use plumbline_sim::runner::{
     run, Discard, Outcome, Pilot, Recorder, SetupError, SimConfig, Status, TruthPose,
 };
+use plumbline_sim::scenario::{fly, Flight};
 use plumbline_sim::sensors::lidar::{LidarProfile, LidarScan};
 use plumbline_sim::vehicle::VehicleParams;
 use plumbline_sim::world::World;
@@ -50,10 +51,12 @@ fn survey_of_the_office_completes_clear_of_the_walls() {
     let c = config("office", 7);
     let plan = Plan::survey(&c.world, PlanLimits::default());
     let mut rec = Transcript::default();
-    let out = run(&c, Pilot::Test(plan.clone()), &mut rec).unwrap();
+    let report = fly(&c, Flight::test_pilot(plan.clone(), &c), &mut rec).unwrap();
+    let out = report.outcome;
     assert_eq!(out.status, Status::Completed, "{out:?}");
     assert!(out.min_clearance_m > c.vehicle.radius_m, "{out:?}");
-    assert!(out.rms_hold_error_m.unwrap() < 0.1, "{out:?}");
+    let tracking = report.score.hold.unwrap();
+    assert!(tracking.rms_m < 0.1, "{tracking:?}");
     assert!(out.distance_flown_m > 45.0, "{out:?}");
     // XV-11 revolutions every 250 ms for the whole flight.
     let expect = (out.sim_seconds / 0.25).floor() as u64;
@@ -111,10 +114,14 @@ fn hover_hold_is_tight_and_a_push_moves_the_vehicle() {
         gusts: None,
         ..config("room", 1)
     };
-    let calm = run(&quiet, hold(&quiet, 10.0), &mut Discard).unwrap();
-    assert_eq!(calm.status, Status::Completed);
+    let hover = |c: &SimConfig| {
+        let plan = Plan::hold(&c.world, PlanLimits::default(), 10.0);
+        fly(c, Flight::test_pilot(plan, c), &mut Discard).unwrap()
+    };
+    let calm = hover(&quiet);
+    assert_eq!(calm.outcome.status, Status::Completed);
     // Motor mismatch (2 %) tilts the take-off a little until the integrator catches it.
-    assert!(calm.max_hold_error_m.unwrap() < 0.1, "{calm:?}");
+    assert!(calm.score.hold.unwrap().max_m < 0.1, "{calm:?}");
     let pushed_cfg = SimConfig {
         pushes: vec![Push {
             start_s: 8.0,
@@ -123,11 +130,14 @@ fn hover_hold_is_tight_and_a_push_moves_the_vehicle() {
         }],
         ..quiet.clone()
     };
-    let pushed = run(&pushed_cfg, hold(&pushed_cfg, 10.0), &mut Discard).unwrap();
-    assert!(pushed.max_hold_error_m.unwrap() > 0.25, "{pushed:?}");
-    assert_eq!(pushed.status, Status::Completed, "the pilot recovers");
-    let gusty = config("room", 1);
-    let g = run(&gusty, hold(&gusty, 10.0), &mut Discard).unwrap();
+    let pushed = hover(&pushed_cfg);
+    assert!(pushed.score.hold.unwrap().max_m > 0.25, "{pushed:?}");
+    assert_eq!(
+        pushed.outcome.status,
+        Status::Completed,
+        "the pilot recovers"
+    );
+    let (calm, g) = (calm.outcome, hover(&config("room", 1)).outcome);
     // Gusts shake the vehicle about: it travels further holding the same point. (Its largest
     // error is the take-off transient of the motor mismatch, in calm air as in gusts.)
     assert!(

@@ -31,13 +31,16 @@ impl Default for SasConfig {
     }
 }
 
-/// Seed 002 eqs. 4-6: sticks in [-1, 1] (roll, pitch, yaw; FLU signs) and body rates in, roll,
-/// pitch and yaw deflections out. Non-finite inputs are treated as zero so the output is finite.
+/// Seed 002 eqs. 4-6: sticks in [-1, 1] (roll, pitch, yaw, signed as on a Mode-2 radio: see
+/// [`crate::msgs::PilotInput`]) and FLU body rates in, FLU roll, pitch and yaw deflections out.
+/// Non-finite inputs are treated as zero so the output is finite.
 ///
-/// Stick signs follow the pilot: roll right and pitch forward are positive sticks, which are a
-/// negative roll and a positive pitch about the FLU axes.
+/// Roll right is a positive rotation about FLU x (the right side goes down, the thrust tilts to
+/// -y, the vehicle slides right) and pitch forward a positive rotation about FLU y (nose down,
+/// the thrust tilts to +x), so both sticks pass through unchanged. Yaw right turns clockwise
+/// seen from above, which is a negative rotation about FLU z (z up): the yaw stick is negated.
 pub fn damp(config: &SasConfig, sticks_norm: [f32; 3], gyro_rad_s: [f32; 3]) -> [f32; 3] {
-    let to_flu = [-1.0, 1.0, 1.0];
+    let to_flu = [1.0, 1.0, -1.0];
     let mut out = [0.0; 3];
     for i in 0..3 {
         let stick = finite_or_zero(sticks_norm[i]).clamp(-1.0, 1.0);
@@ -75,9 +78,10 @@ mod tests {
             gains_per_rad_s: [0.0; 3],
             stick_authority: [0.25, 0.25, 0.2],
         };
-        // Roll right is negative FLU roll; pitch forward is positive FLU pitch (nose down).
-        assert_eq!(damp(&c, [1.0, 1.0, -1.0], [0.0; 3]), [-0.25, 0.25, -0.2]);
-        assert_eq!(damp(&c, [5.0, -5.0, 0.0], [0.0; 3]), [-0.25, -0.25, 0.0]);
+        // Roll right is positive FLU roll, pitch forward positive FLU pitch (nose down), yaw
+        // right (clockwise from above) negative FLU yaw.
+        assert_eq!(damp(&c, [1.0, 1.0, 1.0], [0.0; 3]), [0.25, 0.25, -0.2]);
+        assert_eq!(damp(&c, [5.0, -5.0, -5.0], [0.0; 3]), [0.25, -0.25, 0.2]);
     }
 
     #[test]

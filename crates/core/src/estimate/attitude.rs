@@ -8,7 +8,7 @@
 //! tens of seconds. Heading is not estimated here: the EKF owns yaw, observed by scan matching.
 
 use super::ekf::all_finite;
-use crate::matching::fast_math::atan2_approx;
+use crate::fast_math::atan2_approx;
 use crate::msgs::GRAVITY_M_S2;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 

@@ -33,6 +33,20 @@ pub struct EstimatorCounters {
     pub drag: Counters,
 }
 
+/// What the autopilot knows about the vehicle that the sensors do not say. These facts decide
+/// which of the estimator's assumed measurements hold: "still on the floor" and rotor drag.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Situation {
+    /// Disarmed: the vehicle stands on the floor.
+    pub disarmed: bool,
+    /// In a mode whose rotors carry the vehicle (takeoff, hold, land, manual).
+    pub rotors_carry: bool,
+    /// The supervisor has declared the lidar lost.
+    pub lidar_lost: bool,
+    /// Below this estimated height (m) the vehicle counts as on the ground.
+    pub ground_height_m: f32,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Estimator {
     pub config: EstimatorConfig,
@@ -100,11 +114,27 @@ impl Estimator {
         ok
     }
 
+    /// Fuses the measurements that follow from the vehicle's situation rather than from a
+    /// sensor: "at rest" while it stands on the floor, the drag reading while it flies.
+    pub fn fuse_situation(&mut self, s: &Situation) {
+        // Disarmed means on the floor; so does an estimate below the floor, which happens when a
+        // touchdown stops the vehicle below the sonar's minimum range and the IMU missed the
+        // shock: it is still and at height zero.
+        if s.disarmed || self.ekf.state()[ix::POS + 2] < 0.0 {
+            self.fuse_at_rest();
+        }
+        // The drag measurement holds only in the air (on the floor the accelerometer feels the
+        // floor's slope and friction), and after a lidar loss only if configured to: a draught
+        // then reads as ground velocity (`DragConfig::without_lidar`).
+        let flying = s.rotors_carry && self.ekf.state()[ix::POS + 2] > s.ground_height_m;
+        self.fuse_drag(flying && (!s.lidar_lost || self.config.drag.without_lidar));
+    }
+
     /// Fuses the accelerometer's drag reading once a window is full, if the vehicle has been
     /// `flying` on its rotors the whole window; otherwise the window is dropped. Rejections (a push, a
     /// collision) are counted and never reopen anything: the lidar, not this, is the position
     /// reference.
-    pub fn fuse_drag(&mut self, flying: bool) -> Option<Outcome> {
+    fn fuse_drag(&mut self, flying: bool) -> Option<Outcome> {
         if !flying {
             self.drag_window.clear();
             return None;
@@ -161,11 +191,10 @@ impl Estimator {
         outcome
     }
 
-    /// Fuses "still on the floor", which the caller knows for a fact (disarmed, or an estimate
-    /// below the floor), once `at_rest.period_s` of prediction has passed since it last did
+    /// Fuses "still on the floor", which the situation says is a fact, once `at_rest.period_s` of prediction has passed since it last did
     /// (`None` until then): a rejection means the filter is wrong, so velocity and height are
     /// reopened at once and the fact applied.
-    pub fn fuse_at_rest(&mut self) -> Option<Outcome> {
+    fn fuse_at_rest(&mut self) -> Option<Outcome> {
         // A microsecond of slack, so rounding in the sum of steps does not skip a period.
         if self.since_at_rest_s + 1e-6 < self.config.at_rest.period_s {
             return None;
@@ -395,6 +424,54 @@ mod tests {
         // 0.1 s at 500 Hz: the first step, then every 10 ms.
         assert_eq!(fused, 10);
         assert_eq!(est.counters().at_rest.accepted, 10);
+    }
+
+    /// One second standing level (or hovering level at 1 m by the sonar) in `situation`,
+    /// with `config`; returns how often at-rest and drag were fused.
+    fn fusions(situation: Situation, config: EstimatorConfig, sonar_m: Option<f32>) -> (u32, u32) {
+        let mut est = Estimator::new(config);
+        for _ in 0..500 {
+            assert!(est.predict(&level_at_rest(), 0.002));
+            if let Some(range_m) = sonar_m {
+                est.fuse_sonar(&SonarSample { t_s: 0.0, range_m });
+            }
+            est.fuse_situation(&situation);
+        }
+        let total = |c: Counters| c.accepted + c.rejected + c.invalid;
+        let c = est.counters();
+        (total(c.at_rest), total(c.drag))
+    }
+
+    #[test]
+    fn the_situation_decides_between_at_rest_and_drag() {
+        let config = EstimatorConfig::default();
+        let on_floor = Situation {
+            disarmed: true,
+            rotors_carry: false,
+            lidar_lost: false,
+            ground_height_m: 0.05,
+        };
+        let (at_rest, drag) = fusions(on_floor, config, None);
+        assert!(at_rest >= 90 && drag == 0, "{at_rest} {drag}");
+
+        let flying = Situation {
+            disarmed: false,
+            rotors_carry: true,
+            ..on_floor
+        };
+        let (at_rest, drag) = fusions(flying, config, Some(1.0));
+        assert!(at_rest == 0 && drag >= 5, "{at_rest} {drag}");
+        // Spinning up on the floor is not flying.
+        assert_eq!(fusions(flying, config, None), (0, 0));
+
+        let lidar_lost = Situation {
+            lidar_lost: true,
+            ..flying
+        };
+        assert_eq!(fusions(lidar_lost, config, Some(1.0)).1, 0);
+        let mut without_lidar = config;
+        without_lidar.drag.without_lidar = true;
+        assert!(fusions(lidar_lost, without_lidar, Some(1.0)).1 >= 5);
     }
 
     #[test]

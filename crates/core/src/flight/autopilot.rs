@@ -12,8 +12,8 @@ use crate::control::airframe::Airframe;
 use crate::control::cascade::{Cascade, CascadeConfig, CascadeSetpoint, Vertical};
 use crate::control::mixer::{Demand, Mixer};
 use crate::control::sas::{self, SasConfig};
-use crate::estimate::ekf::{ix, Outcome};
-use crate::estimate::estimator::{Estimator, EstimatorConfig, EstimatorCounters};
+use crate::estimate::ekf::Outcome;
+use crate::estimate::estimator::{Estimator, EstimatorConfig, EstimatorCounters, Situation};
 use crate::msgs::{
     EstimatedState, FailsafeReason, FlightMode, FrameKind, Inputs, MotorCommands, Outputs,
     PilotInput, PositionSetpoint, ScanMatchStatus,
@@ -176,25 +176,15 @@ impl Autopilot {
             let outcome = self.estimator.fuse_scan_match(&m, latency_s);
             m.status == ScanMatchStatus::Matched && outcome == Outcome::Accepted
         });
-        // Disarmed means on the floor; so does an estimate below the floor, which happens when a
-        // touchdown stops the vehicle below the sonar's minimum range and the IMU missed the
-        // shock: it is still and at height zero.
-        let below_floor = self.estimator.ekf().state()[ix::POS + 2] < 0.0;
-        if self.mode == FlightMode::Disarmed || below_floor {
-            self.estimator.fuse_at_rest();
-        }
-        // The drag measurement holds only in the air (on the floor the accelerometer feels the
-        // floor's slope and friction), and after a lidar loss only if configured to: a draught
-        // then reads as ground velocity (`DragConfig::without_lidar`).
-        let flying = matches!(
-            self.mode,
-            FlightMode::Takeoff | FlightMode::Hold | FlightMode::Land | FlightMode::Manual
-        ) && self.estimator.ekf().state()[ix::POS + 2]
-            > self.config.landing.ground_height_m;
-        let lidar_lost = self.supervisor.failsafe() == Some(FailsafeReason::LidarLost);
-        let drag_without_lidar = self.config.estimator.drag.without_lidar;
-        self.estimator
-            .fuse_drag(flying && (!lidar_lost || drag_without_lidar));
+        self.estimator.fuse_situation(&Situation {
+            disarmed: self.mode == FlightMode::Disarmed,
+            rotors_carry: matches!(
+                self.mode,
+                FlightMode::Takeoff | FlightMode::Hold | FlightMode::Land | FlightMode::Manual
+            ),
+            lidar_lost: self.supervisor.failsafe() == Some(FailsafeReason::LidarLost),
+            ground_height_m: self.config.landing.ground_height_m,
+        });
         let estimate = self.estimator.state();
         let rates = self
             .estimator

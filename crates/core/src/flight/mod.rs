@@ -2,10 +2,8 @@
 
 pub mod autopilot;
 pub mod events;
-pub mod level;
 pub mod onboard;
 pub mod supervisor;
-pub mod sweep;
 #[cfg(test)]
 mod test_vehicle;
 #[cfg(test)]

@@ -7,11 +7,11 @@
 //! [`ScanMatchDelta`] is [`scan_match_delta`].
 
 use super::autopilot::{Autopilot, AutopilotConfig};
-use super::level::Leveller;
-use super::sweep::SweepMotion;
 use crate::geom::Pose2;
-use crate::matching::{LidarOdometry, MatchError, OdometryConfig, OdometryStep};
+use crate::matching::{LidarOdometry, OdometryConfig, OdometryStep};
 use crate::msgs::{EstimatedState, Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
+use crate::scan::level::Leveller;
+use crate::scan::sweep::SweepMotion;
 use crate::scan::Scan;
 
 /// Lidar odometry plus autopilot, for scans of up to `N` beams.
@@ -97,7 +97,7 @@ fn sweep_motion(e: &EstimatedState, inputs: &Inputs) -> SweepMotion {
 
 /// The estimator's view of one odometry step. The odometry matches against keyframes, so the
 /// pose change is relative to the current keyframe and the filter re-clones its reference pose
-/// exactly when the odometry takes a new keyframe.
+/// exactly when the odometry says it took one.
 pub fn scan_match_delta(step: &OdometryStep, t_s: f64) -> ScanMatchDelta {
     let mut delta = ScanMatchDelta {
         t_s,
@@ -107,33 +107,19 @@ pub fn scan_match_delta(step: &OdometryStep, t_s: f64) -> ScanMatchDelta {
         dtheta_rad: 0.0,
         covariance: [[0.0; 3]; 3],
         degenerate_axis: None,
-        becomes_reference: false,
+        becomes_reference: step.took_keyframe(),
     };
     match step {
-        OdometryStep::Started => {
-            delta.status = ScanMatchStatus::ReferenceOnly;
-            delta.becomes_reference = true;
-        }
-        OdometryStep::Matched {
-            result,
-            new_keyframe,
-        } => {
+        OdometryStep::Started => delta.status = ScanMatchStatus::ReferenceOnly,
+        OdometryStep::Matched { result, .. } => {
             delta.status = ScanMatchStatus::Matched;
             delta.dx_m = result.motion.x;
             delta.dy_m = result.motion.y;
             delta.dtheta_rad = result.motion.theta;
             delta.covariance = result.covariance;
             delta.degenerate_axis = result.quality.degenerate_direction.map(|d| [d.x, d.y]);
-            delta.becomes_reference = *new_keyframe;
         }
-        OdometryStep::Predicted { error } => {
-            // After a failed match the odometry restarts from this scan unless the scan itself
-            // was unusable.
-            delta.becomes_reference = !matches!(
-                error,
-                MatchError::TooFewPoints { .. } | MatchError::BeamsNotInAngularOrder { .. }
-            );
-        }
+        OdometryStep::Predicted { .. } => {}
     }
     delta
 }
@@ -142,6 +128,7 @@ pub fn scan_match_delta(step: &OdometryStep, t_s: f64) -> ScanMatchDelta {
 mod tests {
     extern crate std;
     use super::*;
+    use crate::matching::MatchError;
 
     /// A 360-beam scan of a 6 m x 4 m room (walls at x = -3, 3 and y = -2, 2) taken at `pose`.
     fn room_scan(pose: Pose2, stamp_s: f64) -> Scan<360> {
@@ -185,23 +172,34 @@ mod tests {
         assert!(m.covariance[0][0] > 0.0 && m.covariance[1][1] > 0.0);
         assert!(!m.becomes_reference && m.t_s == 0.25);
 
+        // A scan the matcher cannot use fails without becoming the keyframe.
+        let mut blind_scan = Scan::<360>::new(0.5);
+        blind_scan.push(crate::scan::Beam::new(0.0, 1.0)).unwrap();
+        let blind = odometry.update(&blind_scan, None);
+        assert!(
+            matches!(
+                blind,
+                OdometryStep::Predicted {
+                    restarted: false,
+                    ..
+                }
+            ),
+            "{blind:?}"
+        );
+        let f = scan_match_delta(&blind, 0.5);
+        assert_eq!(f.status, ScanMatchStatus::Failed);
+        assert!(!f.becomes_reference);
+        // A failed match that restarted the odometry from its scan re-clones the reference.
         let lost = OdometryStep::Predicted {
             error: MatchError::TooFewCorrespondences {
                 found: 3,
                 needed: 20,
             },
+            restarted: true,
         };
-        let f = scan_match_delta(&lost, 3.0);
-        assert_eq!(f.status, ScanMatchStatus::Failed);
-        assert!(f.becomes_reference);
-        let blind = OdometryStep::Predicted {
-            error: MatchError::TooFewPoints {
-                reference: 300,
-                current: 2,
-                needed: 20,
-            },
-        };
-        assert!(!scan_match_delta(&blind, 4.0).becomes_reference);
+        let restarted = scan_match_delta(&lost, 3.0);
+        assert_eq!(restarted.status, ScanMatchStatus::Failed);
+        assert!(restarted.becomes_reference);
     }
 
     #[test]

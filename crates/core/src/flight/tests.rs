@@ -291,11 +291,12 @@ fn manual_flight_is_rate_damped_and_follows_the_sticks() {
     f.fly(1.0);
     assert_eq!(f.out.mode, FlightMode::Manual);
     assert!(f.veh.position_m.z > 0.2, "climbing: {}", f.veh.position_m.z);
-    // Roll right for 0.2 s: negative roll about FLU x, and the rate dies out after release.
+    // Roll right for 0.2 s: positive roll about FLU x (right side down), and the rate dies out
+    // after release.
     f.veh.pilot.roll_norm = 1.0;
     f.fly(0.2);
     let (roll, _, _) = f.veh.roll_pitch_yaw();
-    assert!(roll < -0.05, "{roll}");
+    assert!(roll > 0.05, "{roll}");
     f.veh.pilot.roll_norm = 0.0;
     f.fly(0.5);
     assert!(

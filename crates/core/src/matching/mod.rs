@@ -7,13 +7,14 @@
 mod associate;
 mod config;
 mod driver;
-pub(crate) mod fast_math;
 mod fit_lanes;
 mod icl_paper;
 mod line_sums;
+mod line_fit;
 mod linalg;
 pub mod local_map;
 mod metrics;
+mod nearest;
 mod odometry;
 mod prepared;
 mod recovery;

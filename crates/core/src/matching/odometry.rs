@@ -42,7 +42,23 @@ pub enum OdometryStep {
         new_keyframe: bool,
     },
     /// The match failed; the pose was carried forward by the prediction alone.
-    Predicted { error: MatchError },
+    Predicted {
+        error: MatchError,
+        /// This scan became the keyframe, so one bad keyframe cannot stall the odometry; it
+        /// does not when the scan itself was unusable.
+        restarted: bool,
+    },
+}
+
+impl OdometryStep {
+    /// Whether this scan became the keyframe the next scans are matched against.
+    pub fn took_keyframe(&self) -> bool {
+        match *self {
+            Self::Started => true,
+            Self::Matched { new_keyframe, .. } => new_keyframe,
+            Self::Predicted { restarted, .. } => restarted,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -73,7 +89,8 @@ impl<const N: usize> LidarOdometry<N> {
         self.keyframe_pose
     }
 
-    /// How many keyframes have been taken so far; it changes exactly when one is.
+    /// How many keyframes have been taken so far: a clock that ticks once a keyframe, by which
+    /// the local map tells old walls from new.
     pub fn keyframes_taken(&self) -> u32 {
         self.keyframes_taken
     }
@@ -105,7 +122,10 @@ impl<const N: usize> LidarOdometry<N> {
                     self.keyframes_taken = self.keyframes_taken.wrapping_add(1);
                     OdometryStep::Started
                 }
-                Err(error) => OdometryStep::Predicted { error },
+                Err(error) => OdometryStep::Predicted {
+                    error,
+                    restarted: false,
+                },
             };
         }
         let predicted_motion = prior.filter(|p| p.is_finite()).unwrap_or(self.last_motion);
@@ -132,16 +152,15 @@ impl<const N: usize> LidarOdometry<N> {
             }
             Err(error) => {
                 self.pose = predicted;
-                // Start again from this scan if it is usable, so one bad keyframe cannot stall us.
-                if !matches!(
+                let restarted = !matches!(
                     error,
                     MatchError::TooFewPoints { .. } | MatchError::BeamsNotInAngularOrder { .. }
-                ) && self.matcher.set_reference(scan).is_ok()
-                {
+                ) && self.matcher.set_reference(scan).is_ok();
+                if restarted {
                     self.keyframe_pose = predicted;
                     self.keyframes_taken = self.keyframes_taken.wrapping_add(1);
                 }
-                OdometryStep::Predicted { error }
+                OdometryStep::Predicted { error, restarted }
             }
         }
     }

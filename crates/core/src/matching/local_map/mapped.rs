@@ -70,10 +70,9 @@ impl<'m, const N: usize> MappedOdometry<'m, N> {
     }
 
     pub fn update(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> MappedStep {
-        let keyframes_before = self.odometry.keyframes_taken();
         let previous_keyframe = self.odometry.keyframe_pose();
         let step = self.odometry.update(scan, prior);
-        if self.odometry.keyframes_taken() == keyframes_before {
+        if !step.took_keyframe() {
             return MappedStep {
                 step,
                 map: MapUse::NotKeyframe,

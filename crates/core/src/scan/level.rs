@@ -13,7 +13,7 @@
 //! tilt squared, is a short arctangent series.
 
 use super::sweep::{Sweep, SweepMotion};
-use crate::scan::Scan;
+use super::Scan;
 
 /// The levelled copy of the scan being matched, and the beam directions it was made with.
 #[derive(Clone, Debug)]

@@ -1,4 +1,5 @@
-//! Fast trigonometry for the matcher's hot loops.
+//! Fast trigonometry for hot loops: the matcher's beams and bearings, the attitude filter's
+//! Euler angles, the de-skew of every beam.
 //!
 //! The bearing only picks a search window a few beams wide, so 1e-4 rad of error is harmless,
 //! and libm's exact atan2f would be a third of a match's time. Turning a beam into a point needs

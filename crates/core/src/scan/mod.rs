@@ -3,6 +3,13 @@
 //! Angles are counter-clockwise from body x (radians); every beam carries its own validity so a
 //! device's "no return" is never confused with a range of 0 or max. Each beam also carries the
 //! time since the revolution started, so motion during the sweep can be removed later.
+//!
+//! Preprocessing that turns a revolution as the sensor took it into one the matcher can use
+//! lives beside it: [`level`] projects a tilted scan onto the horizontal plane and [`sweep`]
+//! moves every beam to where the sensor was at mid-revolution.
+
+pub mod level;
+pub mod sweep;
 
 use crate::geom::Vec2;
 use libm::{cosf, sinf};

@@ -7,7 +7,7 @@
 //! mid-revolution frame with the estimated velocity and the gyro's yaw rate, the frame the
 //! estimator already assigns the match to (`estimate/scan_match.rs`).
 
-use crate::matching::fast_math::sin_cos;
+use crate::fast_math::sin_cos;
 
 /// How the sensor moved during the revolution, in the levelled heading frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -67,7 +67,7 @@ impl Sweep {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::flight::level::Leveller;
+    use crate::scan::level::Leveller;
     use crate::scan::{Beam, Scan};
     use core::f32::consts::TAU;
 

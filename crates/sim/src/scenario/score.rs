@@ -1,0 +1,251 @@
+//! Scoring a flight against ground truth, in one place: the hold error (DESIGN.md §6: the
+//! horizontal distance between the true position and where the vehicle should be), how far a
+//! push carried the vehicle and how soon it was back, the estimate's drift, the landing.
+//!
+//! The test pilot is scored on following its plan, sampled at each of its steps; the onboard
+//! stack on holding over the start, from the truth sampled at [`STATE_RATE_HZ`] while its own
+//! log says it was in Hold.
+//!
+//! [`STATE_RATE_HZ`]: crate::runner::STATE_RATE_HZ
+
+use crate::disturb::Push;
+use crate::math::Vec3;
+use crate::onboard_link::FlightLog;
+use crate::runner::{Outcome, Recorder, SimConfig, StateSample, Status, TruthPose};
+use crate::sensors::lidar::LidarScan;
+use plumbline_core::msgs::{FlightMode, ImuSample, SonarSample};
+use std::cell::RefCell;
+use std::rc::Rc;
+
+/// The test pilot is scored while its reference is this high: on the ground and in the first
+/// centimetres of the climb it is not tracking anything, m.
+const AIRBORNE_M: f64 = 0.3;
+/// Hold error is scored from this long after Hold is entered: the end of the climb is a
+/// transient, not station keeping, s.
+const SETTLE_S: f64 = 2.0;
+/// Time after a push that is left out of the hold error (seed 000's recovery target); the
+/// push itself is scored by [`OnboardScore::push_max_error_m`] and
+/// [`OnboardScore::recovery_s`], s.
+const RECOVERY_ALLOWANCE_S: f64 = 3.0;
+/// "Back on station": within this distance of the hold point, m.
+const RECOVERED_M: f64 = 0.05;
+
+/// Horizontal distance of `position` from `target`, m: the one definition of hold error.
+pub fn horizontal_error(position: Vec3, target: [f64; 2]) -> f64 {
+    (position.x - target[0]).hypot(position.y - target[1])
+}
+
+/// RMS and largest of a set of hold errors, m.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HoldError {
+    pub rms_m: f64,
+    pub max_m: f64,
+}
+
+/// Hold errors summed as they come.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ErrorTally {
+    sum_sq: f64,
+    count: u64,
+    max_m: f64,
+}
+
+impl ErrorTally {
+    pub fn add(&mut self, error_m: f64) {
+        self.sum_sq += error_m * error_m;
+        self.count += 1;
+        self.max_m = self.max_m.max(error_m);
+    }
+
+    /// `None` when nothing was added.
+    pub fn result(&self) -> Option<HoldError> {
+        (self.count > 0).then(|| HoldError {
+            rms_m: (self.sum_sq / self.count as f64).sqrt(),
+            max_m: self.max_m,
+        })
+    }
+}
+
+/// The hold error of the true `states` from `point` over the instants `during` accepts.
+pub fn hold_error(
+    states: &[StateSample],
+    point: [f64; 2],
+    during: impl Fn(f64) -> bool,
+) -> Option<HoldError> {
+    let mut tally = ErrorTally::default();
+    for s in states.iter().filter(|s| during(s.t_s)) {
+        tally.add(horizontal_error(s.position, point));
+    }
+    tally.result()
+}
+
+/// How a flight did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Score {
+    /// From the plan's reference (test pilot) or the hold point (onboard); `None` when the
+    /// vehicle never held.
+    pub hold: Option<HoldError>,
+    /// Distance between the onboard estimate and the truth at the end, m (onboard only).
+    pub estimate_drift_m: Option<f64>,
+    pub onboard: Option<OnboardScore>,
+}
+
+/// What only an onboard flight is scored on.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OnboardScore {
+    /// Largest hold error from the scenario's push until [`RECOVERY_ALLOWANCE_S`] after it, m.
+    pub push_max_error_m: Option<f64>,
+    /// From the end of the push until back within [`RECOVERED_M`], s.
+    pub recovery_s: Option<f64>,
+    /// It flew, did not crash, and ended disarmed on the ground.
+    pub landed: bool,
+}
+
+/// How a scenario's flight is to be scored.
+pub(super) enum Judge {
+    /// The test pilot: against its plan.
+    Tracking,
+    /// The onboard stack, logging into `log`: holding over the start; `push` is the
+    /// scenario's own push.
+    Onboard {
+        log: Rc<RefCell<FlightLog>>,
+        push: Option<Push>,
+    },
+}
+
+/// Passes every sample on to the caller's recorder and keeps what the score needs.
+pub(super) struct Scorer<'r> {
+    inner: &'r mut dyn Recorder,
+    tracking: ErrorTally,
+    states: Vec<StateSample>,
+}
+
+impl<'r> Scorer<'r> {
+    pub(super) fn new(inner: &'r mut dyn Recorder) -> Self {
+        Self {
+            inner,
+            tracking: ErrorTally::default(),
+            states: Vec::new(),
+        }
+    }
+
+    /// The score of the finished run, and the onboard stack's log when it flew.
+    pub(super) fn score(
+        self,
+        judge: Judge,
+        config: &SimConfig,
+        outcome: &Outcome,
+    ) -> (Score, Option<FlightLog>) {
+        match judge {
+            Judge::Tracking => {
+                let score = Score {
+                    hold: self.tracking.result(),
+                    ..Score::default()
+                };
+                (score, None)
+            }
+            Judge::Onboard { log, push } => {
+                // The runner has dropped the stack, so the log is normally ours alone.
+                let log = Rc::try_unwrap(log)
+                    .map(RefCell::into_inner)
+                    .unwrap_or_else(|shared| shared.borrow().clone());
+                let score = score_onboard(&log, push, config, outcome, &self.states);
+                (score, Some(log))
+            }
+        }
+    }
+}
+
+impl Recorder for Scorer<'_> {
+    fn scan(&mut self, scan: &LidarScan, truth: &TruthPose) {
+        self.inner.scan(scan, truth);
+    }
+    fn imu(&mut self, sample: &ImuSample) {
+        self.inner.imu(sample);
+    }
+    fn sonar(&mut self, sample: &SonarSample) {
+        self.inner.sonar(sample);
+    }
+    fn state(&mut self, sample: &StateSample) {
+        self.states.push(*sample);
+        self.inner.state(sample);
+    }
+    fn tracking(&mut self, t_s: f64, position: Vec3, reference: Vec3) {
+        if reference.z > AIRBORNE_M {
+            self.tracking
+                .add(horizontal_error(position, [reference.x, reference.y]));
+        }
+        self.inner.tracking(t_s, position, reference);
+    }
+}
+
+/// The time windows in which the vehicle held on station: Hold mode after [`SETTLE_S`].
+fn hold_windows(log: &FlightLog, end_s: f64) -> Vec<(f64, f64)> {
+    let mut windows = Vec::new();
+    for (k, (t, mode)) in log.modes.iter().enumerate() {
+        if *mode == FlightMode::Hold {
+            let until = log.modes.get(k + 1).map_or(end_s, |m| m.0);
+            windows.push((t + SETTLE_S, until));
+        }
+    }
+    windows
+}
+
+/// Scores an onboard flight on the truth `states`: holding over the start outside the pushes
+/// (and their recovery), the scenario's `push`, drift of the estimate, landing.
+fn score_onboard(
+    log: &FlightLog,
+    push: Option<Push>,
+    config: &SimConfig,
+    outcome: &Outcome,
+    states: &[StateSample],
+) -> Score {
+    let start = [config.world.start[0], config.world.start[1]];
+    let end_s = states.last().map_or(0.0, |s| s.t_s);
+    let windows = hold_windows(log, end_s);
+    let recovering = |t: f64| {
+        config
+            .pushes
+            .iter()
+            .any(|p| t >= p.start_s && t < p.start_s + p.duration_s + RECOVERY_ALLOWANCE_S)
+    };
+    let holding = |t: f64| windows.iter().any(|w| t >= w.0 && t < w.1) && !recovering(t);
+    let hold = hold_error(states, start, holding);
+    // The scenario's push: how far it carried the vehicle and how soon it was back.
+    let pushed = push.filter(|p| config.pushes.contains(p) && end_s > p.start_s + p.duration_s);
+    let (push_max_error_m, recovery_s) = match pushed {
+        Some(p) => {
+            let push_end = p.start_s + p.duration_s;
+            let during = |t: f64| t >= p.start_s && t < push_end + RECOVERY_ALLOWANCE_S;
+            let max = hold_error(states, start, during).map(|e| e.max_m);
+            let recovery = states
+                .iter()
+                .filter(|s| s.t_s >= push_end)
+                .find(|s| horizontal_error(s.position, start) <= RECOVERED_M)
+                .map(|s| s.t_s - push_end);
+            (max, recovery)
+        }
+        None => (None, None),
+    };
+    // The estimate frame starts at the take-off pose.
+    let drift = states.last().map(|s| {
+        let (sin, cos) = config.world.start[2].sin_cos();
+        let [ex, ey, _] = log.last_estimate.position_m.map(f64::from);
+        let estimate = [
+            start[0] + cos * ex - sin * ey,
+            start[1] + sin * ex + cos * ey,
+        ];
+        horizontal_error(s.position, estimate)
+    });
+    let crashed = matches!(outcome.status, Status::Crashed { .. });
+    let flew = log.modes.iter().any(|m| m.1 == FlightMode::Takeoff);
+    Score {
+        hold,
+        estimate_drift_m: drift,
+        onboard: Some(OnboardScore {
+            push_max_error_m,
+            recovery_s,
+            landed: !crashed && flew && log.final_mode() == FlightMode::Disarmed,
+        }),
+    }
+}
