@@ -4,7 +4,7 @@
 //! flat however long the log, and a run that is stopped keeps the trajectory so far.
 
 use crate::log_args::{no_scans, report_bad_lines, LogArgs};
-use crate::plot::{plot_trajectory, require_png, TrajectoryPlot};
+use crate::plot::{plot_trajectory, stage_png, write_png, TrajectoryPlot};
 use crate::report::{print_summary, progress_bytes, CliError, CliResult};
 use clap::Args;
 use plumbline_core::geom::Pose2;
@@ -77,9 +77,6 @@ pub fn run(args: OdometryArgs) -> CliResult {
     let kind = MatcherKind::from_name(&args.matcher)
         .ok_or_else(|| CliError(format!("unknown matcher {}", args.matcher)))?;
     // Everything that can be checked without the work comes first: options, names, outputs.
-    if let Some(plot) = &args.plot {
-        require_png("--plot", plot)?;
-    }
     let outputs: Vec<(&str, &Path)> = [("--out", &args.out), ("--plot", &args.plot)]
         .into_iter()
         .filter_map(|(role, p)| p.as_deref().map(|p| (role, p)))
@@ -108,7 +105,11 @@ pub fn run(args: OdometryArgs) -> CliResult {
     };
     let (mut reader, read_progress) = open_log(&args.log, &read_options)?;
     let mut traj_out = args.out.as_deref().map(OutputFile::stage).transpose()?;
-    let plot_out = args.plot.as_deref().map(OutputFile::stage).transpose()?;
+    let plot_out = args
+        .plot
+        .as_deref()
+        .map(|p| stage_png("--plot", p))
+        .transpose()?;
     let mut cells = vec![MapCell::default(); side * side];
     let mut odometry = if use_map {
         let map = LineMap::new(&mut cells, map_config)
@@ -206,9 +207,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
         w.commit()?;
     }
     if let (Some(out), Some(data)) = (plot_out, &plot) {
-        plot_trajectory(out.current_path(), data)
-            .map_err(|e| CliError(format!("{}: {e}", out.shown())))?;
-        out.commit()?;
+        write_png(out, |p| plot_trajectory(p, data))?;
     }
     times_us.sort_by(f64::total_cmp);
     let stats = reader.stats();

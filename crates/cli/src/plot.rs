@@ -26,24 +26,42 @@ pub fn fonts_available() -> bool {
     })
 }
 
+use crate::report::{CliError, CliResult};
 use plotters::prelude::*;
 use plumbline_io::carmen::{LaserRecord, OdomPose};
+use plumbline_io::output::OutputFile;
 use std::path::Path;
 
 /// Plots are PNG files, and the encoder picks the format by the name: refuse any other name up
 /// front, before any work, with what to do instead.
-pub fn require_png(option: &str, path: &Path) -> Result<(), crate::report::CliError> {
+fn require_png(option: &str, path: &Path) -> Result<(), CliError> {
     let is_png = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
     if is_png {
         Ok(())
     } else {
-        Err(crate::report::CliError(format!(
+        Err(CliError(format!(
             "{option} {}: plots are written as PNG; give a file name ending in .png",
             path.display()
         )))
     }
+}
+
+/// A PNG output, staged: the name checked and the file creatable before any work is done.
+pub fn stage_png(option: &str, path: &Path) -> Result<OutputFile, CliError> {
+    require_png(option, path)?;
+    Ok(OutputFile::stage(path)?)
+}
+
+/// Draws into a staged PNG and puts it in place, so an existing picture is only ever replaced
+/// by a finished one; `draw` renders into the path it is given.
+pub fn write_png(
+    out: OutputFile,
+    draw: impl FnOnce(&Path) -> Result<(), Box<dyn std::error::Error>>,
+) -> CliResult {
+    draw(out.current_path()).map_err(|e| CliError(format!("{}: {e}", out.shown())))?;
+    Ok(out.commit()?)
 }
 
 /// Enough scans to show the walls without drawing millions of pixels.

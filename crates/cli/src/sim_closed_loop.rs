@@ -1,11 +1,13 @@
 //! The onboard stack's side of `plumbline sim`: the options of the scenarios it flies, what it
 //! did in the summary (modes, failsafe, motor jitter, the push's score), and its plots.
 
+use crate::plot::write_png;
 use crate::report::CliError;
 use crate::sim_plot::{stacked_panels, Line};
 use clap::Args;
 use plotters::prelude::*;
 use plumbline_core::msgs::{FailsafeReason, FlightMode};
+use plumbline_io::output::OutputFile;
 use plumbline_sim::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
 use plumbline_sim::scenario::score::OnboardScore;
@@ -136,8 +138,8 @@ pub fn plots(
             ),
         ],
     )];
-    stacked_panels(&dir.join("position_error.png"), error)
-        .map_err(|e| CliError(format!("position_error.png: {e}")))?;
+    let png = |name: &str| Ok::<_, CliError>(OutputFile::stage(&dir.join(name))?);
+    write_png(png("position_error.png")?, |p| stacked_panels(p, error))?;
     let colors = [RED, GREEN, BLUE, BLACK];
     let names = ["motor 1", "motor 2", "motor 3", "motor 4"];
     let motors: Vec<Line> = (0..4)
@@ -150,9 +152,7 @@ pub fn plots(
             (names[i], colors[i], pts)
         })
         .collect();
-    stacked_panels(
-        &dir.join("motors.png"),
-        vec![("motor commands (0..1)", motors)],
-    )
-    .map_err(|e| CliError(format!("motors.png: {e}")))
+    write_png(png("motors.png")?, |p| {
+        stacked_panels(p, vec![("motor commands (0..1)", motors)])
+    })
 }

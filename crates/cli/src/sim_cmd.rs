@@ -2,6 +2,7 @@
 //! ground truth in the benchmark formats (DESIGN.md §4, §5).
 
 use crate::log_args::LogArgs;
+use crate::plot::write_png;
 use crate::report::{print_summary, progress, CliError, CliResult};
 use crate::sim_closed_loop;
 use crate::sim_plot;
@@ -12,6 +13,7 @@ use indicatif::ProgressBar;
 use plumbline_core::msgs::{ImuSample, SonarSample};
 use plumbline_io::carmen::{write_robotlaser1, LaserRecord};
 use plumbline_io::input::read_text;
+use plumbline_io::output::{check_distinct, OutputFile};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
 use plumbline_sim::runner::{Recorder, SetupError, SimConfig, StateSample, Status, TruthPose};
@@ -21,8 +23,7 @@ use plumbline_sim::truth::relations;
 use plumbline_sim::vehicle::VehicleParams;
 use plumbline_sim::world::World;
 use serde_json::json;
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -128,10 +129,10 @@ fn load_vehicle(arg: &str) -> Result<VehicleParams, CliError> {
 
 /// Streams the outputs into DIR as they are produced.
 struct Files {
-    clf: BufWriter<File>,
-    imu: BufWriter<File>,
-    sonar: BufWriter<File>,
-    truth: BufWriter<File>,
+    clf: OutputFile,
+    imu: OutputFile,
+    sonar: OutputFile,
+    truth: OutputFile,
     poses: Vec<TruthPose>,
 }
 
@@ -206,11 +207,10 @@ impl Recorder for Collector {
     }
 }
 
-fn create(dir: &Path, name: &str) -> Result<BufWriter<File>, CliError> {
-    let path = dir.join(name);
-    File::create(&path)
-        .map(BufWriter::new)
-        .map_err(|e| CliError(format!("{}: {e}", path.display())))
+/// Outputs are staged and put in place when the flight is done: a run that fails or is stopped
+/// leaves the files of an earlier run as they were.
+fn create(dir: &Path, name: &str) -> Result<OutputFile, CliError> {
+    Ok(OutputFile::stage(&dir.join(name))?)
 }
 
 fn open_files(dir: &Path) -> Result<Files, CliError> {
@@ -231,7 +231,33 @@ fn open_files(dir: &Path) -> Result<Files, CliError> {
     })
 }
 
-fn finish_files(dir: &Path, mut f: Files) -> Result<(), CliError> {
+/// Every file a flight may write into `--out DIR`.
+const OUTPUT_NAMES: &[&str] = &[
+    "scans.clf",
+    "imu.csv",
+    "sonar.csv",
+    "truth.txt",
+    "truth.relations",
+    "summary.json",
+    "top.png",
+    "flight.png",
+    "position_error.png",
+    "motors.png",
+];
+
+/// Refuses a world or vehicle file that a flight's outputs would overwrite.
+fn check_inputs_outside(args: &SimArgs, dir: &Path) -> CliResult {
+    let inputs: Vec<(&str, &Path)> = [("--world", &args.world), ("--vehicle", &args.vehicle)]
+        .into_iter()
+        .map(|(role, arg)| (role, Path::new(arg.as_str())))
+        .filter(|(_, p)| p.is_file())
+        .collect();
+    let paths: Vec<PathBuf> = OUTPUT_NAMES.iter().map(|n| dir.join(n)).collect();
+    let outputs: Vec<(&str, &Path)> = paths.iter().map(|p| ("--out", p.as_path())).collect();
+    Ok(check_distinct(&inputs, &outputs)?)
+}
+
+fn finish_files(dir: &Path, f: Files) -> Result<(), CliError> {
     let mut rel = create(dir, "truth.relations")?;
     for r in relations(&f.poses, 10.0) {
         let t = r.translation;
@@ -248,8 +274,8 @@ fn finish_files(dir: &Path, mut f: Files) -> Result<(), CliError> {
             r.yaw
         )?;
     }
-    for w in [&mut f.clf, &mut f.imu, &mut f.sonar, &mut f.truth, &mut rel] {
-        w.flush()?;
+    for w in [f.clf, f.imu, f.sonar, f.truth, rel] {
+        w.commit()?;
     }
     Ok(())
 }
@@ -298,7 +324,6 @@ fn rasterize(args: &SimArgs, log_path: &Path) -> CliResult {
         .out
         .as_deref()
         .ok_or_else(|| CliError("--rasterize needs --out DIR".into()))?;
-    let log = args.log_args.read(log_path)?;
     let name = log_path
         .file_name()
         .map_or("log".into(), |s| s.to_string_lossy().into_owned());
@@ -308,6 +333,10 @@ fn rasterize(args: &SimArgs, log_path: &Path) -> CliResult {
         .unwrap_or("log")
         .trim_end_matches("-corrected")
         .to_string();
+    let paths = ["world", "pgm", "yaml"].map(|ext| dir.join(format!("{name}.{ext}")));
+    let outputs = paths.each_ref().map(|p| ("--out", p.as_path()));
+    check_distinct(&[("--rasterize", log_path)], &outputs)?;
+    let log = args.log_args.read(log_path)?;
     let (world, grid) = sim_world::rasterize(&log, &name)?;
     sim_world::write_world(dir, &world, &grid)?;
     let [x0, y0, x1, y1] = world.bounds();
@@ -373,6 +402,9 @@ pub fn run(args: SimArgs) -> CliResult {
     let flight = entry
         .prepare(&options, &mut config)
         .map_err(|e| scenario_error(&args, e))?;
+    if let Some(dir) = args.out.as_deref() {
+        check_inputs_outside(&args, dir)?;
+    }
     let files = args.out.as_deref().map(open_files).transpose()?;
     let bar = progress(flight.planned_s.ceil() as u64, "sim");
     let mut collector = Collector {
@@ -399,18 +431,17 @@ pub fn run(args: SimArgs) -> CliResult {
     if let (Some(dir), Some(files)) = (args.out.as_deref(), collector.files.take()) {
         let poses = files.poses.clone();
         finish_files(dir, files)?;
-        sim_plot::top_view(
-            &dir.join("top.png"),
-            &config.world,
-            &collector.states,
-            &poses,
-        )
-        .map_err(|e| CliError(format!("top.png: {e}")))?;
-        sim_plot::time_series(&dir.join("flight.png"), &collector.states)
-            .map_err(|e| CliError(format!("flight.png: {e}")))?;
+        let states = &collector.states;
+        write_png(create(dir, "top.png")?, |p| {
+            sim_plot::top_view(p, &config.world, states, &poses)
+        })?;
+        write_png(create(dir, "flight.png")?, |p| {
+            sim_plot::time_series(p, states)
+        })?;
         let text = serde_json::to_string_pretty(&summary).map_err(|e| CliError(e.to_string()))?;
-        std::fs::write(dir.join("summary.json"), text + "\n")
-            .map_err(|e| CliError(format!("summary.json: {e}")))?;
+        let mut out = create(dir, "summary.json")?;
+        writeln!(out, "{text}").map_err(|e| out.error(e))?;
+        out.commit()?;
     }
     print_summary(&summary, args.json);
     Ok(())

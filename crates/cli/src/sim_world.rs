@@ -3,9 +3,11 @@
 
 use crate::report::CliError;
 use plumbline_io::carmen::CarmenLog;
+use plumbline_io::output::OutputFile;
 use plumbline_sim::occupancy::Occupancy;
 use plumbline_sim::scene::Scene;
 use plumbline_sim::world::World;
+use std::io::Write;
 use std::path::Path;
 
 /// Resolution of worlds rasterised from logs, m per cell.
@@ -153,8 +155,9 @@ fn drone_path(scene: &Scene, poses: &[plumbline_io::carmen::OdomPose]) -> Vec<[f
 pub fn write_world(dir: &Path, world: &World, grid: &Occupancy) -> Result<(), CliError> {
     std::fs::create_dir_all(dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
     let write = |ext: &str, bytes: &[u8]| {
-        let path = dir.join(format!("{}.{ext}", world.name));
-        std::fs::write(&path, bytes).map_err(|e| CliError(format!("{}: {e}", path.display())))
+        let mut out = OutputFile::stage(&dir.join(format!("{}.{ext}", world.name)))?;
+        out.write_all(bytes).map_err(|e| out.error(e))?;
+        Ok::<_, CliError>(out.commit()?)
     };
     write("world", world.to_text().as_bytes())?;
     write("pgm", &grid.to_pgm())?;

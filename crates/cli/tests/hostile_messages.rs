@@ -96,7 +96,11 @@ fn gzip_is_recognised_by_content_whatever_the_name() {
     assert_eq!(last_json(&a), last_json(&b));
 
     let room = dir.join("room.txt");
-    std::fs::write(&room, "start 1 1 0\noutline 0 0 6 0 6 4.5 0 4.5\npath 1 1 4 1\n").unwrap();
+    std::fs::write(
+        &room,
+        "start 1 1 0\noutline 0 0 6 0 6 4.5 0 4.5\npath 1 1 4 1\n",
+    )
+    .unwrap();
     let world = dir.join("room.world");
     gzip_to(&room, &world);
     let out = run(&[

@@ -2,11 +2,12 @@
 //! from above, x forward (up the page), y left, so the picture matches the robot's view.
 
 use super::require_frames;
+use crate::plot::{stage_png, write_png};
 use crate::report::{CliError, CliResult};
 use clap::Args;
 use plotters::prelude::*;
 use plumbline_io::input::open_input;
-use plumbline_io::output::{check_distinct, OutputFile};
+use plumbline_io::output::check_distinct;
 use plumbline_io::serial::{decode_stream, DecodedScan, Device};
 use std::path::{Path, PathBuf};
 
@@ -25,10 +26,9 @@ pub struct PlotArgs {
 }
 
 pub fn run(a: PlotArgs) -> CliResult {
-    crate::plot::require_png("--out", &a.out)?;
     check_distinct(&[("CAPTURE", &a.capture)], &[("--out", &a.out)])?;
     let input = open_input(&a.capture)?;
-    let out = OutputFile::stage(&a.out)?;
+    let out = stage_png("--out", &a.out)?;
     let (mut seen, mut wanted) = (0, None);
     let summary = decode_stream(
         a.device,
@@ -56,9 +56,7 @@ pub fn run(a: PlotArgs) -> CliResult {
         a.revolution,
         a.capture.display()
     );
-    draw(&scan, &title, out.current_path())
-        .map_err(|e| CliError(format!("{}: {e}", a.out.display())))?;
-    Ok(out.commit()?)
+    write_png(out, |path| draw(&scan, &title, path))
 }
 
 /// Valid hit points in the sensor frame, drawn as (-y, x) so forward is up and left is left.
