@@ -203,3 +203,42 @@ fn a_recording_cut_by_a_vanishing_port_keeps_its_last_revolution_and_says_what_i
     );
     assert_eq!(summary["revolutions"], scans.len());
 }
+
+#[test]
+fn sim_refuses_outputs_that_would_overwrite_its_world_or_log() {
+    let dir = scratch("sim-alias");
+    let world = dir.join("truth.txt");
+    let room = "start 1 1 0\noutline 0 0 6 0 6 4.5 0 4.5\npath 1 1 4 1\n";
+    std::fs::write(&world, room).unwrap();
+    let out = run(&[
+        "sim",
+        "--world",
+        p(&world),
+        "--controller",
+        "test-pilot",
+        "--duration",
+        "1",
+        "--out",
+        p(&dir),
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("same file as the input --world"),
+        "{}",
+        stderr(&out)
+    );
+    assert_eq!(std::fs::read_to_string(&world).unwrap(), room);
+    assert_eq!(entries(&dir), ["truth.txt"]);
+
+    let log = dir.join("intel.world");
+    let text = std::fs::read(excerpt()).unwrap();
+    std::fs::write(&log, &text).unwrap();
+    let out = run(&["sim", "--rasterize", p(&log), "--out", p(&dir)]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("same file as the input --rasterize"),
+        "{}",
+        stderr(&out)
+    );
+    assert_eq!(std::fs::read(&log).unwrap(), text);
+}
