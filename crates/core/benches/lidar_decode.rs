@@ -1,5 +1,5 @@
-//! Lidar decoding throughput on the real XV-11 captures (issue 5 target: >= 100 MB/s of XV-11
-//! bytes on one core; the device sends about 6 KB/s). Criterion reports bytes per second.
+//! Lidar decoding throughput on the real XV-11 captures (target: >= 100 MB/s of XV-11 bytes on
+//! one core; the device sends about 6 KB/s). Criterion reports bytes per second.
 //!
 //! `packets` runs the byte parser alone, `revolutions` adds revolution assembly, `scans` also
 //! converts every revolution to a `Scan<360>` (what a driver hands to the matcher); these feed

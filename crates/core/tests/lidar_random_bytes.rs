@@ -1,4 +1,4 @@
-//! Every decoder on random and mangled bytes (what CI runs instead of the fuzzers): no panic,
+//! Every decoder on random and mangled bytes (the fuzzers' checks, run by every test run): no panic,
 //! counters that add up, and real packets recovered from around garbage. Deterministic: proptest
 //! runs with a fixed seed from `proptest-regressions`-free config below.
 

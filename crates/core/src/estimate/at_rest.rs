@@ -16,8 +16,8 @@ pub struct AtRestConfig {
     pub height_std_m: f32,
     /// Fused at most this often (s). What spoils "still" (vibration, a hand on the frame)
     /// changes slowly, so readings a step apart are not independent; fused at every IMU step
-    /// it claimed five times the information at 500 Hz, and after a landing it was a third of
-    /// the closed loop's cost.
+    /// it would claim five times the information at 500 Hz, and after a landing it would be a
+    /// third of the closed loop's cost.
     pub period_s: f32,
 }
 

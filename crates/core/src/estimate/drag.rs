@@ -8,8 +8,8 @@
 //! fusion" of PX4's and ArduPilot's EKFs). It is what keeps an IMU-only velocity bounded: the
 //! tilt-and-thrust prediction integrates any tilt error into a growing velocity, while this
 //! measurement ties the velocity to the force the vehicle feels. Air is taken as still: a
-//! draught reads as ground velocity, which the measurement noise allows for (wind states, tried,
-//! changed nothing measurable in the simulator's draughty room, see BENCHMARKS.md).
+//! draught reads as ground velocity, which the measurement noise allows for (two wind states make
+//! no measurable difference in the simulator's draughty room, see BENCHMARKS.md).
 //!
 //! The accelerometer is averaged over a window before it is fused, which divides its noise and
 //! keeps the filter update off the per-sample path. Only fused while the vehicle flies on its
@@ -35,8 +35,8 @@ pub struct DragConfig {
     /// noise over the window (0.02 m/s^2/sqrt(Hz) / sqrt(0.1 s) = 0.06), draughts (0.3 m/s of
     /// air at c = 0.1 is 0.03, lasting seconds) and the quadratic drag the model leaves out
     /// (0.01 at 0.3 m/s) come to about 0.1; it is widened to 0.3 because at 0.1 the IMU-only
-    /// velocity after a lidar loss followed the accelerometer's noise, the hold chased it, and
-    /// the vehicle strayed further (BENCHMARKS.md, issue 4).
+    /// velocity after a lidar loss follows the accelerometer's noise, the hold chases it, and
+    /// the vehicle strays further (BENCHMARKS.md, closed-loop flight).
     pub specific_force_std_m_s2: f32,
     /// Normalised innovation squared above which a window is rejected. Tighter than the
     /// EKF's general gate: a window that overlaps a push or a bump carries a force this model

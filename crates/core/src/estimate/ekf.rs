@@ -56,10 +56,9 @@ pub struct EkfConfig {
     pub accel_bias_walk: f32,
     pub gyro_bias_walk: f32,
     /// The covariance is propagated at most this often (s); the state every step. Keeps the
-    /// N x N products off the per-IMU-sample path. 20 ms: at 10 ms it was a sixth of the
-    /// onboard stack's cost, and the simulated holds are unchanged (xv11 60 s seeds 1-80, RMS
-    /// 1.63 against 1.62 cm, no estimate slip; BENCHMARKS.md, issue 4). Session 3 dropped
-    /// 20 ms for two slips in 60 seeds, which were the unskewed revolutions fixed since.
+    /// N x N products off the per-IMU-sample path. 20 ms: at 10 ms it is a sixth of the
+    /// onboard stack's cost, and the simulated holds do not tell the two apart (xv11 60 s seeds
+    /// 1-80, RMS 1.63 against 1.62 cm, no estimate slip at either).
     pub covariance_period_s: f32,
     /// Normalised innovation squared above which a measurement is rejected, for 1, 2 and 3
     /// dimensions (chi-square 99.7 %).
@@ -287,7 +286,7 @@ impl Ekf {
         }
         // The clones' own block came out of the column passes, each entry and its mirror by
         // different roundings: one triangle is copied onto the other, so P stays exactly
-        // symmetric (the updates keep it so and no longer symmetrise).
+        // symmetric (the updates keep it so and do not symmetrise).
         for a in 1..3 {
             for b in 0..a {
                 self.p[(ix::CLONE + b, ix::CLONE + a)] = self.p[(ix::CLONE + a, ix::CLONE + b)];
@@ -347,8 +346,8 @@ impl Ekf {
         // Joseph form (I - KH) P (I - KH)^T + K R K^T multiplied out: with U = P H^T and
         // S = H U + R it is P - K U^T - U K^T + K S K^T for any gain (zeroed consider rows
         // included), which is P - (K W^T + W K^T) with W = U - K S / 2. One symmetric correction
-        // of rank 2M on one triangle, mirrored: the N x N temporaries and the symmetrising pass
-        // were most of an update's cost.
+        // of rank 2M on one triangle, mirrored: N x N temporaries and a symmetrising pass would
+        // be most of an update's cost.
         let w = pht - k * s * 0.5;
         subtract_symmetric_product(&mut self.p, &k, &w);
         self.x[ix::YAW] = crate::geom::normalize_angle(self.x[ix::YAW]);
@@ -386,7 +385,7 @@ pub(crate) fn all_finite(values: &[f32]) -> bool {
 }
 
 /// `m h^T`, visiting only the non-zero entries of `h`: a measurement sees a few of the N
-/// states, and the dense products were most of an update's cost.
+/// states, and dense products would be most of an update's cost.
 fn times_ht<const M: usize>(m: &Covariance, h: &SMatrix<f32, M, N>) -> SMatrix<f32, N, M> {
     let mut out = SMatrix::<f32, N, M>::zeros();
     for state in 0..N {

@@ -89,8 +89,8 @@ impl Estimator {
     pub fn predict(&mut self, imu: &ImuSample, dt: f32) -> bool {
         // The tilt filter's gravity reference is the specific force with the EKF's accelerometer
         // bias removed, the same force the EKF predicts with: fed the raw reading, the tilt
-        // filter pulled toward a tilt the EKF kept correcting away, and once the lidar stopped
-        // the two no longer agreed on which way was level.
+        // filter would pull toward a tilt the EKF keeps correcting away, and once the lidar
+        // stops the two would disagree on which way is level.
         let bias = self.ekf.state().fixed_rows::<3>(ix::ACCEL_BIAS);
         let accel: [f32; 3] = core::array::from_fn(|i| imu.accel_m_s2[i] - bias[i]);
         if self.attitude.update(imu.gyro_rad_s, accel, dt).is_err() {

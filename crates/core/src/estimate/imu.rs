@@ -100,7 +100,7 @@ impl Ekf {
         // only in the moved rows, which by symmetry are B's moved columns except where a moved
         // row meets a moved column. So: the moved columns of B (column operations, over
         // contiguous memory), then the 9 x 9 block where moved meets moved. Dense products
-        // were the largest single cost of the closed loop, row operations on P the next.
+        // would be the largest single cost of the closed loop, row operations on P the next.
         let g = jacobian_entries(r, world_specific, yaw_gain, dt);
         // Column k of the column-major matrix.
         let column = |k: usize| k * N..(k + 1) * N;

@@ -25,17 +25,17 @@ impl LineFit {
 }
 
 /// Most neighbours on each side a point's line fit takes (the fit normally stops earlier, at
-/// its spatial extent). Capping at 4 where beams are 1 degree apart was tried: faster and better
-/// on Intel (near error 2.3 -> 1.5 cm), but the normals got noisier on 360-beam scans with 2 cm
+/// its spatial extent). A cap of 4 where beams are 1 degree apart would be faster and better on
+/// Intel (near error 2.3 -> 1.5 cm), but makes the normals noisier on 360-beam scans with 2 cm
 /// noise (local-map drift test 1.4 -> 2.0 cm).
 const LINE_NEIGHBOURS: usize = 8;
 
-/// On scans denser than [`DENSE_BEAM_STEP_RAD`], 8 neighbours were too few: at the URG-04LX's
+/// On scans denser than [`DENSE_BEAM_STEP_RAD`], 8 neighbours are too few: at the URG-04LX's
 /// 0.36 degrees they span 5 cm at a metre, under the extent, and with its 1 % range noise most
-/// such fits failed the flatness test (a third of the points kept, every match in the recovery
-/// search: median 15.6 ms a match in the simulator's room, 53 us with 16). 12 was not enough
-/// there (12.5 ms). Sparser scans keep 8: more made the matcher surer of itself than the local
-/// map's weighting was tuned for (the synthetic laps' drift 1.4 -> 2.4 cm at 1 degree).
+/// such fits fail the flatness test (a third of the points kept, every match in the recovery
+/// search: median 15.6 ms a match in the simulator's room, 53 us with 16). 12 is not enough
+/// there (12.5 ms). Sparser scans keep 8: more make the matcher surer of itself than the local
+/// map's weighting is tuned for (the synthetic laps' drift 1.4 -> 2.4 cm at 1 degree).
 const DENSE_LINE_NEIGHBOURS: usize = 16;
 
 /// Centres whose line fits share one copy of their points (a multiple of 4, the lanes): the

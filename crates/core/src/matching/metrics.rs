@@ -26,9 +26,9 @@ pub struct PointToLineGaussNewton {
 
 impl Metric for PointToLineGaussNewton {
     /// Only points whose reference partner lies on a fitted line take part. A point-to-point
-    /// fallback at corners was tried (it lowered near-relation error on Intel from 2.3 to 1.5 cm)
-    /// but on dense noisy scans (UTM-30LX, 1440 beams) it produced wrong matches that flew the
-    /// closed loop 3 m off, so it is not used.
+    /// fallback at corners would lower the near-relation error on Intel (2.3 to 1.5 cm), but on
+    /// dense noisy scans (UTM-30LX, 1440 beams) it makes wrong matches that flew the simulated
+    /// closed loop 3 m off.
     fn pair<const N: usize>(
         r: &PreparedScan<N>,
         j: usize,

@@ -1,5 +1,5 @@
-//! Odometry with a local map: scan-to-keyframe matching as before, and every new keyframe
-//! aligned with the map before it is added to it.
+//! Odometry with a local map: scan-to-keyframe matching as [`LidarOdometry`] does it, and every
+//! new keyframe aligned with the map before it is added to it.
 
 use super::cells::LineMap;
 use super::refine::{

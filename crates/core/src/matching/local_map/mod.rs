@@ -1,5 +1,5 @@
 //! A small local map that keyframes are aligned with, to cut the drift of scan-to-keyframe
-//! odometry (issue 2 allows "keyframes or a small local map … if they cut drift").
+//! odometry: each keyframe's heading is tied to walls mapped long before.
 
 mod cells;
 mod mapped;

@@ -94,9 +94,10 @@ pub enum Declined {
 ///
 /// Only the old walls score, so a pose that puts more of the scan over walls mapped long ago
 /// scores higher merely for that. Driving down a corridor whose near end was mapped long ago,
-/// the best poses lie back along the corridor, and the search used to jump there: in the
-/// simulator's office with a 30 m lidar, 1 m jumps along the corridor at every search, 8.8 m of
-/// mean error where the map without the search had 1 cm. There the score is a slope that runs
+/// the best poses lie back along the corridor, and a search that took its best pose would jump
+/// there: in the simulator's office with a 30 m lidar, 1 m jumps along the corridor at every
+/// search, 8.8 m of mean error where the map without the search has 1 cm. There the score is a
+/// slope that runs
 /// off one edge of the window, not a peak. So a winner on the window's edge is searched again
 /// from a window centred on it (a real peak may lie just beyond), and the answer counts only if
 /// the poses scoring nearly as well as the winner reach no edge of that window without also
