@@ -52,16 +52,7 @@ fn a_byte_order_mark_is_invisible_to_every_reader() {
     let world = dir.join("bom.world");
     let room = "start 1 1 0\naltitude 1\noutline 0 0 6 0 6 4.5 0 4.5\npath 1 1 4 1\n";
     std::fs::write(&world, with_bom(room.as_bytes())).unwrap();
-    let out = run(&[
-        "sim",
-        "--world",
-        p(&world),
-        "--controller",
-        "test-pilot",
-        "--duration",
-        "1",
-        "--json",
-    ]);
+    let out = support::fly(&world, None);
     assert!(out.status.success(), "{}", stderr(&out));
 
     let plain = trajectory(&excerpt(), &dir.join("plain.traj"));
@@ -103,15 +94,7 @@ fn gzip_is_recognised_by_content_whatever_the_name() {
     .unwrap();
     let world = dir.join("room.world");
     gzip_to(&room, &world);
-    let out = run(&[
-        "sim",
-        "--world",
-        p(&world),
-        "--controller",
-        "test-pilot",
-        "--duration",
-        "1",
-    ]);
+    let out = support::fly(&world, None);
     assert!(out.status.success(), "{}", stderr(&out));
 
     let cap = dir.join("capture.bin");

@@ -27,20 +27,18 @@ fn assert_untouched(dir: &Path, bytes: &[u8], log: &str) {
     assert_eq!(entries(dir), ["precious.bin", "precious.bin.log"]);
 }
 
+/// Records from `port` into `dir/precious.bin`, ending after 0.3 s of silence.
+fn record_into(dir: &Path, port: &str) -> std::process::Output {
+    let raw = dir.join("precious.bin");
+    let args = ["lidar", "record", "--device", "xv11", "--port", port];
+    run(&[&args[..], &["--idle-timeout", "0.3", "--out", p(&raw)]].concat())
+}
+
 #[test]
 fn a_port_that_cannot_be_opened_leaves_existing_files_untouched() {
     let dir = scratch("no-port");
     let (bytes, log) = precious(&dir);
-    let out = run(&[
-        "lidar",
-        "record",
-        "--device",
-        "xv11",
-        "--port",
-        "/dev/plumbline-no-such-port",
-        "--out",
-        p(&dir.join("precious.bin")),
-    ]);
+    let out = record_into(&dir, "/dev/plumbline-no-such-port");
     assert!(!out.status.success());
     assert!(stderr(&out).contains("cannot open"), "{}", stderr(&out));
     assert_untouched(&dir, &bytes, log);
@@ -55,18 +53,7 @@ fn a_port_that_never_sends_leaves_existing_files_untouched() {
     let files = dir.join("files");
     std::fs::create_dir(&files).unwrap();
     let (bytes, log) = precious(&files);
-    let out = run(&[
-        "lidar",
-        "record",
-        "--device",
-        "xv11",
-        "--port",
-        p(&socat.b),
-        "--idle-timeout",
-        "0.3",
-        "--out",
-        p(&files.join("precious.bin")),
-    ]);
+    let out = record_into(&files, p(&socat.b));
     assert!(!out.status.success());
     assert!(stderr(&out).contains("no data for"), "{}", stderr(&out));
     assert_untouched(&files, &bytes, log);
@@ -210,17 +197,7 @@ fn sim_refuses_outputs_that_would_overwrite_its_world_or_log() {
     let world = dir.join("truth.txt");
     let room = "start 1 1 0\noutline 0 0 6 0 6 4.5 0 4.5\npath 1 1 4 1\n";
     std::fs::write(&world, room).unwrap();
-    let out = run(&[
-        "sim",
-        "--world",
-        p(&world),
-        "--controller",
-        "test-pilot",
-        "--duration",
-        "1",
-        "--out",
-        p(&dir),
-    ]);
+    let out = support::fly(&world, Some(&dir));
     assert!(!out.status.success());
     assert!(
         stderr(&out).contains("same file as the input --world"),

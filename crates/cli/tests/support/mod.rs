@@ -30,6 +30,16 @@ pub fn run<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
     Command::new(BIN).args(args).output().unwrap()
 }
 
+/// Flies `world` for one second with the simulator's test pilot, writing into `out` if given.
+pub fn fly(world: &Path, out: Option<&Path>) -> Output {
+    let mut args = vec!["sim", "--world", p(world), "--controller", "test-pilot"];
+    args.extend(["--duration", "1"]);
+    if let Some(dir) = out {
+        args.extend(["--out", p(dir)]);
+    }
+    run(&args)
+}
+
 /// Runs the binary under a 1 GiB address-space cap, so a run that would read an endless input
 /// into memory fails fast instead of exhausting the machine.
 pub fn run_capped(args: &[&str]) -> Output {
