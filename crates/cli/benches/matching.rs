@@ -14,7 +14,7 @@ use plumbline_core::matching::{MatchConfig, MatcherKind, ScanMatcher};
 use plumbline_core::scan::{Beam, Scan};
 use plumbline_io::carmen::{read_log, ReadOptions};
 use plumbline_sim::math::Vec3;
-use plumbline_sim::scene::Scene;
+use plumbline_sim::world::scene::Scene;
 use plumbline_sim::world::World;
 use std::io::Write;
 use std::path::{Path, PathBuf};

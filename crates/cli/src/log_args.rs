@@ -1,5 +1,6 @@
 //! Options shared by every subcommand that reads a CARMEN log.
 
+use crate::numeric::{within, Range};
 use crate::report::CliError;
 use clap::Args;
 use plumbline_io::carmen::{
@@ -11,10 +12,13 @@ use std::path::Path;
 pub struct LogArgs {
     /// Field of view of FLASER scans in degrees (FLASER does not store it). Default: the
     /// benchmark convention, 180 degrees (180/181 beams at 1 degree, 360/361 at 0.5 degree).
-    #[arg(long, value_name = "DEG")]
+    /// Valid range: (0, 360].
+    #[arg(long, value_name = "DEG", value_parser = within::<f32>(Range::above(0.0, 360.0)))]
     pub fov_deg: Option<f32>,
     /// FLASER readings at or above this are "no return" (SICK's 81.83/81.91 m sentinels).
-    #[arg(long, value_name = "M", default_value_t = FLASER_MAX_RANGE_M)]
+    /// Valid range: (0, 1000].
+    #[arg(long, value_name = "M", default_value_t = FLASER_MAX_RANGE_M,
+          value_parser = within::<f32>(Range::above(0.0, 1000.0)))]
     pub max_range: f32,
     /// Count and pass over malformed lines instead of stopping at the first one.
     #[arg(long)]
@@ -22,29 +26,22 @@ pub struct LogArgs {
 }
 
 impl LogArgs {
-    /// The reader options, after checking the values make sense.
-    pub fn options(&self) -> Result<ReadOptions, CliError> {
+    /// The reader options; their values were checked while the command line was read.
+    pub fn options(&self) -> ReadOptions {
         let fov = match self.fov_deg {
             None => FovRule::Conventional,
-            Some(d) if d.is_finite() && d > 0.0 && d <= 360.0 => FovRule::Radians(d.to_radians()),
-            Some(d) => return Err(CliError(format!("--fov-deg must be in (0, 360], got {d}"))),
+            Some(d) => FovRule::Radians(d.to_radians()),
         };
-        if !(self.max_range.is_finite() && self.max_range > 0.0) {
-            return Err(CliError(format!(
-                "--max-range must be positive, got {}",
-                self.max_range
-            )));
-        }
-        Ok(ReadOptions {
+        ReadOptions {
             fov,
             flaser_max_range_m: self.max_range,
             skip_bad_lines: self.skip_bad_lines,
-        })
+        }
     }
 
     /// Reads a whole log into memory, for commands that need all of it at once.
     pub fn read(&self, path: &Path) -> Result<CarmenLog, CliError> {
-        let log = read_log(path, &self.options()?)?;
+        let log = read_log(path, &self.options())?;
         report_bad_lines(&log.stats);
         if log.scans.is_empty() {
             return Err(no_scans(path));

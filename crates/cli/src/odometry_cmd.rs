@@ -4,6 +4,7 @@
 //! flat however long the log, and a run that is stopped keeps the trajectory so far.
 
 use crate::log_args::{no_scans, report_bad_lines, LogArgs};
+use crate::numeric::{within, Range};
 use crate::plot::{plot_trajectory, stage_png, write_png, TrajectoryPlot};
 use crate::report::{print_summary, progress_bytes, CliError, CliResult};
 use clap::Args;
@@ -18,7 +19,7 @@ use plumbline_core::matching::{
 use plumbline_core::scan::Scan;
 use plumbline_io::carmen::{open_log, OdomPose};
 use plumbline_io::output::{check_distinct, OutputFile};
-use plumbline_io::trajectory::{write_trajectory, TrajectoryPoint};
+use plumbline_io::trajectory::{TrajectoryPoint, TrajectoryWriter};
 use serde_json::json;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -43,11 +44,13 @@ pub struct OdometryArgs {
     /// Draw the trajectory over the scan points into this PNG (a `.png` file).
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// New keyframe after this much travel, m.
-    #[arg(long, default_value_t = OdometryConfig::default().keyframe_distance_m)]
+    /// New keyframe after this much travel, m. Valid range: (0, 10].
+    #[arg(long, default_value_t = OdometryConfig::default().keyframe_distance_m,
+          value_parser = within::<f32>(Range::above(0.0, 10.0)))]
     pub keyframe_distance: f32,
-    /// New keyframe after this much turning, degrees.
-    #[arg(long, default_value_t = OdometryConfig::default().keyframe_angle_rad.to_degrees())]
+    /// New keyframe after this much turning, degrees. Valid range: (0, 180].
+    #[arg(long, default_value_t = OdometryConfig::default().keyframe_angle_rad.to_degrees(),
+          value_parser = within::<f32>(Range::above(0.0, 180.0)))]
     pub keyframe_angle_deg: f32,
     /// Do not align keyframes with the local map of the walls seen so far: plain
     /// scan-to-keyframe odometry, which drifts more (BENCHMARKS.md).
@@ -57,14 +60,17 @@ pub struct OdometryArgs {
     /// (what takes the drift out at the end of a loop).
     #[arg(long)]
     pub no_relocalize: bool,
-    /// Local map cell edge, m.
-    #[arg(long, default_value_t = LineMapConfig::default().cell_m)]
+    /// Local map cell edge, m. Valid range: [0.01, 10].
+    #[arg(long, default_value_t = LineMapConfig::default().cell_m,
+          value_parser = within::<f32>(Range::closed(0.01, 10.0)))]
     pub map_cell: f32,
     /// Local map width, m (rounded to whole cells; the map rolls along with the vehicle).
-    #[arg(long, default_value_t = 64.0)]
+    /// Valid range: (0, 10000], and at most 2048 cells a side.
+    #[arg(long, default_value_t = 64.0, value_parser = within::<f32>(Range::above(0.0, 10000.0)))]
     pub map_size: f32,
-    /// Weight of the scan match against the map when aligning a keyframe.
-    #[arg(long, default_value_t = RefineConfig::default().matcher_weight)]
+    /// Weight of the scan match against the map when aligning a keyframe. Valid range: [0, 100].
+    #[arg(long, default_value_t = RefineConfig::default().matcher_weight,
+          value_parser = within::<f32>(Range::closed(0.0, 100.0)))]
     pub map_matcher_weight: f32,
     #[command(flatten)]
     pub log_args: LogArgs,
@@ -82,7 +88,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
         .filter_map(|(role, p)| p.as_deref().map(|p| (role, p)))
         .collect();
     check_distinct(&[("LOG", &args.log)], &outputs)?;
-    let read_options = args.log_args.options()?;
+    let read_options = args.log_args.options();
     let config = OdometryConfig {
         matcher: MatchConfig::with_kind(kind),
         keyframe_distance_m: args.keyframe_distance,
@@ -99,12 +105,16 @@ pub fn run(args: OdometryArgs) -> CliResult {
     };
     let use_map = !args.no_local_map;
     let side = if use_map {
-        map_side(args.map_size, args.map_cell, args.map_matcher_weight)?
+        map_side(args.map_size, args.map_cell)?
     } else {
         0
     };
     let (mut reader, read_progress) = open_log(&args.log, &read_options)?;
-    let mut traj_out = args.out.as_deref().map(OutputFile::stage).transpose()?;
+    let mut traj_out = args
+        .out
+        .as_deref()
+        .map(|p| OutputFile::stage(p).map(TrajectoryWriter::new))
+        .transpose()?;
     let plot_out = args
         .plot
         .as_deref()
@@ -131,12 +141,13 @@ pub fn run(args: OdometryArgs) -> CliResult {
     let mut first_failure: Option<String> = None;
     let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
     let mut previous_odom: Option<OdomPose> = None;
+    let mut lost = LostTally::default();
     let mut scans = 0usize;
     loop {
         let rec = match reader.next_scan() {
             Ok(Some(rec)) => rec,
             Ok(None) => break,
-            Err(e) => return Err(kept_so_far(e.into(), traj_out.as_ref(), scans)),
+            Err(e) => return Err(kept_so_far(e.into(), traj_out.take(), scans)),
         };
         scans += 1;
         *scan = rec.to_scan().map_err(|_| {
@@ -145,7 +156,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
                 args.log.display(),
                 rec.beam_count()
             ));
-            kept_so_far(e, traj_out.as_ref(), scans - 1)
+            kept_so_far(e, traj_out.take(), scans - 1)
         })?;
         let prior = match (args.odom_prior, previous_odom, rec.odom) {
             (true, Some(a), Some(b)) => Some(a.between(b).to_f32()),
@@ -184,9 +195,17 @@ pub fn run(args: OdometryArgs) -> CliResult {
                 });
             }
         }
+        let predicted = matches!(step, OdometryStep::Predicted { .. });
+        lost.note(rec.timestamp_s, predicted);
         let pose = OdomPose::from_f32(odometry.pose());
         if let Some(w) = traj_out.as_mut() {
-            write_pose(w, &rec.timestamp_text, pose)?;
+            let point = TrajectoryPoint {
+                timestamp_text: rec.timestamp_text.clone(),
+                timestamp_s: rec.timestamp_s,
+                pose,
+                lost: predicted,
+            };
+            write_pose(w, &point)?;
         }
         if let Some(p) = plot.as_mut() {
             p.add(&rec, pose);
@@ -203,8 +222,15 @@ pub fn run(args: OdometryArgs) -> CliResult {
             "plumbline: {failed} match(es) failed and were bridged by prediction; first: {f}"
         );
     }
+    if lost.scans > 0 {
+        eprintln!(
+            "plumbline: no measurement for {:.2} s in {} interval(s) ({} scans): their poses are a decaying \
+             prediction, marked by `# lost` lines in the trajectory and not scored by `eval`",
+            lost.seconds, lost.intervals, lost.scans
+        );
+    }
     if let Some(w) = traj_out {
-        w.commit()?;
+        finish_trajectory(w)?.commit()?;
     }
     if let (Some(out), Some(data)) = (plot_out, &plot) {
         write_png(out, |p| plot_trajectory(p, data))?;
@@ -217,6 +243,9 @@ pub fn run(args: OdometryArgs) -> CliResult {
         "median_match_us": percentile(&times_us, 0.5),
         "p99_match_us": percentile(&times_us, 0.99),
         "failed_matches": failed,
+        "lost_scans": lost.scans,
+        "lost_intervals": lost.intervals,
+        "lost_s": lost.seconds,
         "keyframes": keyframes,
         "degenerate_matches": degenerate,
         "rejected_points": rejected,
@@ -237,53 +266,80 @@ pub fn run(args: OdometryArgs) -> CliResult {
 
 /// Writes one trajectory line and flushes it, so a run that is killed keeps every pose it
 /// computed; the first line replaces the old file.
-fn write_pose(w: &mut OutputFile, timestamp_text: &str, pose: OdomPose) -> CliResult {
-    let point = TrajectoryPoint {
-        timestamp_text: timestamp_text.to_string(),
-        timestamp_s: 0.0,
-        pose,
-    };
-    write_trajectory(w, std::slice::from_ref(&point))
-        .and_then(|()| w.flush())
-        .map_err(|e| w.error(e))?;
-    if !w.is_published() {
-        w.publish()?;
+fn write_pose(w: &mut TrajectoryWriter<OutputFile>, point: &TrajectoryPoint) -> CliResult {
+    w.push(point)
+        .and_then(|()| w.get_mut().flush())
+        .map_err(|e| w.get_ref().error(e))?;
+    let out = w.get_mut();
+    if !out.is_published() {
+        out.publish()?;
     }
     Ok(())
 }
 
-/// An error part way through a log, saying where the poses computed before it are.
-fn kept_so_far(e: CliError, out: Option<&OutputFile>, scans: usize) -> CliError {
+/// Closes an open run of lost poses with its `# lost` line and hands back the file.
+fn finish_trajectory(w: TrajectoryWriter<OutputFile>) -> Result<OutputFile, CliError> {
+    let shown = w.get_ref().shown().to_string();
+    w.finish().map_err(|e| CliError(format!("{shown}: {e}")))
+}
+
+/// An error part way through a log, saying where the poses computed before it are (with the
+/// last run of lost poses marked as such).
+fn kept_so_far(e: CliError, out: Option<TrajectoryWriter<OutputFile>>, scans: usize) -> CliError {
     match out {
-        Some(w) if w.is_published() => CliError(format!(
-            "{e} (the trajectory of the {scans} scan(s) before it is in {})",
-            w.shown()
-        )),
+        Some(w) if w.get_ref().is_published() => {
+            let shown = w.get_ref().shown().to_string();
+            let kept =
+                finish_trajectory(w).and_then(|mut f| Ok(f.flush().map_err(|e| f.error(e))?));
+            match kept {
+                Ok(()) => CliError(format!(
+                    "{e} (the trajectory of the {scans} scan(s) before it is in {shown})"
+                )),
+                Err(k) => CliError(format!("{e} (and the trajectory so far: {k})")),
+            }
+        }
         _ => e,
     }
 }
 
-/// Cells per side of the local map, after checking the map options make sense.
-fn map_side(size_m: f32, cell_m: f32, matcher_weight: f32) -> Result<usize, CliError> {
+/// Cells per side of the local map: each option is in its range already (checked while parsing),
+/// but together they can still ask for more memory than any map needs.
+fn map_side(size_m: f32, cell_m: f32) -> Result<usize, CliError> {
     /// 4 million cells, about 200 MB: past this a typo is likelier than a wish.
     const MAX_SIDE: f32 = 2048.0;
-    if !(cell_m.is_finite() && cell_m > 0.0) {
-        return Err(CliError(format!(
-            "--map-cell {cell_m}: must be a positive length in m"
-        )));
-    }
     let side = (size_m / cell_m).ceil();
-    if !(size_m.is_finite() && size_m > 0.0 && side <= MAX_SIDE) {
+    if side > MAX_SIDE {
         return Err(CliError(format!(
-            "--map-size {size_m}: must be positive and at most {MAX_SIDE} cells of {cell_m} m"
-        )));
-    }
-    if !(matcher_weight.is_finite() && matcher_weight >= 0.0) {
-        return Err(CliError(format!(
-            "--map-matcher-weight {matcher_weight}: must be zero or positive"
+            "--map-size {size_m}: at most {MAX_SIDE} cells of {cell_m} m a side (a smaller map or larger --map-cell)"
         )));
     }
     Ok(side as usize)
+}
+
+/// How long the odometry went without a measurement: the time from the last measured scan to
+/// the last scan of each run of predicted ones.
+#[derive(Default)]
+struct LostTally {
+    scans: usize,
+    intervals: usize,
+    seconds: f64,
+    previous: Option<(f64, bool)>,
+}
+
+impl LostTally {
+    fn note(&mut self, stamp_s: f64, predicted: bool) {
+        if predicted {
+            self.scans += 1;
+            let (was_lost, dt) = match self.previous {
+                Some((t, was_lost)) => (was_lost, stamp_s - t),
+                None => (false, 0.0),
+            };
+            self.intervals += !was_lost as usize;
+            // Stamps that go backwards are counted and reported by the reader; they add nothing.
+            self.seconds += dt.max(0.0);
+        }
+        self.previous = Some((stamp_s, predicted));
+    }
 }
 
 /// Scan-to-keyframe odometry, with or without the local map.

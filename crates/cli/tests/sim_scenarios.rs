@@ -1,7 +1,7 @@
-//! Issue 4's closed-loop scenarios through `plumbline sim`: the onboard stack flies the
-//! simulated room, and the summary reports what happened. Runs are shortened (the push still
-//! lands at t = 20 s) to keep the suite quick; the bounds come from seeds 1-10 (BENCHMARKS.md,
-//! "Closed loop (issue 4)") with margin.
+//! The closed-loop scenarios through `plumbline sim`: the onboard stack flies the simulated
+//! room, and the summary reports what happened. Runs are shortened (the push still lands at
+//! t = 20 s) to keep the suite quick; the bounds come from seeds 1-10 (BENCHMARKS.md, "Closed
+//! loop") with margin.
 
 use serde_json::{json, Value};
 use std::path::PathBuf;

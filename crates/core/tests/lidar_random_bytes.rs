@@ -139,7 +139,7 @@ fn scip_random_bytes_and_random_lines_never_panic() {
 }
 
 #[test]
-fn rplidar_random_bytes_never_panic_and_nodes_are_plausible() {
+fn rplidar_random_bytes_never_panic_and_revolutions_are_plausible() {
     use plumbline_core::lidar::rplidar::RplidarDecoder;
     runner(256)
         .run(&random_bytes(), |bytes| {
@@ -150,9 +150,16 @@ fn rplidar_random_bytes_never_panic_and_nodes_are_plausible() {
             for r in &revs {
                 nodes += r.nodes().len() as u32;
                 prop_assert!(r.nodes().iter().all(|n| n.angle_q6 < 360 * 64));
+                prop_assert!(r.is_plausible());
             }
             let s = d.stats();
-            prop_assert_eq!(nodes + s.overflow, s.packets_ok);
+            prop_assert_eq!(s.revolutions as usize, revs.len());
+            // Nodes of implausible revolutions are dropped with them.
+            if s.implausible == 0 {
+                prop_assert_eq!(nodes + s.overflow, s.packets_ok);
+            } else {
+                prop_assert!(nodes + s.overflow < s.packets_ok);
+            }
             prop_assert!(u64::from(s.packets_ok) * 5 + s.skipped_bytes <= s.bytes);
             Ok(())
         })

@@ -10,6 +10,8 @@
 //!   a recording once the device has sent its first bytes, a trajectory once its first pose is
 //!   known. Writing goes on into the same file, so a run killed later keeps what it wrote.
 //!
+//! [`write`] is the whole-file case: stage, write, commit.
+//!
 //! [`check_distinct`] refuses outputs that name an input or each other (through symlinks, hard
 //! links, `..` or names of files that do not exist yet).
 
@@ -179,6 +181,13 @@ impl Drop for OutputFile {
     }
 }
 
+/// Writes `bytes` to `path` whole: the target is replaced only once every byte is on disk.
+pub fn write(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let mut out = OutputFile::stage(path)?;
+    out.write_all(bytes).map_err(|e| out.error(e))?;
+    out.commit()
+}
+
 /// What a path refers to, for telling whether two paths are one file.
 struct Identity {
     /// Device and inode of an existing file: equal for hard links and symlinks.
@@ -291,6 +300,17 @@ mod tests {
         assert_eq!(fs::read_to_string(&target).unwrap(), "ab");
         out.commit().unwrap();
         assert_eq!(entries(&d), ["t.txt"]);
+    }
+
+    #[test]
+    fn write_creates_the_folder_and_names_the_path_it_cannot_create() {
+        let d = dir("write");
+        write(&d.join("a/b/whole.txt"), b"y").unwrap();
+        assert_eq!(fs::read(d.join("a/b/whole.txt")).unwrap(), b"y");
+        // A file where a folder should be.
+        let e = write(&d.join("a/b/whole.txt/inner.txt"), b"z").unwrap_err();
+        assert!(e.to_string().contains("whole.txt"), "{e}");
+        assert_eq!(entries(&d.join("a/b")), ["whole.txt"]);
     }
 
     #[test]

@@ -31,17 +31,44 @@ pub fn read_relations(path: &Path) -> Result<Vec<Relation>, ReadError> {
     Ok(out)
 }
 
-/// Writes relations in the same layout, z, roll and pitch zero.
+/// Writes planar relations in the same layout, z, roll and pitch zero.
 pub fn write_relations<W: std::io::Write + ?Sized>(
     w: &mut W,
     relations: &[Relation],
 ) -> std::io::Result<()> {
     for r in relations {
-        writeln!(
+        write_relation_3d(
             w,
-            "{:.6} {:.6} {:.6} {:.6} 0.000000 0.000000 0.000000 {:.6}",
-            r.t1_s, r.t2_s, r.motion.x_m, r.motion.y_m, r.motion.theta_rad
+            &Relation3d {
+                t1_s: r.t1_s,
+                t2_s: r.t2_s,
+                translation_m: [r.motion.x_m, r.motion.y_m, 0.0],
+                roll_pitch_yaw_rad: [0.0, 0.0, r.motion.theta_rad],
+            },
         )?;
     }
     Ok(())
+}
+
+/// A relation in full 3-D (ground truth from a simulator): translation and ZYX Euler angles of
+/// the pose at t2 in the frame of the pose at t1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Relation3d {
+    pub t1_s: f64,
+    pub t2_s: f64,
+    pub translation_m: [f64; 3],
+    pub roll_pitch_yaw_rad: [f64; 3],
+}
+
+/// Writes one relations line, times and values to the microsecond and micrometre.
+pub fn write_relation_3d<W: std::io::Write + ?Sized>(
+    w: &mut W,
+    r: &Relation3d,
+) -> std::io::Result<()> {
+    let ([x, y, z], [roll, pitch, yaw]) = (r.translation_m, r.roll_pitch_yaw_rad);
+    writeln!(
+        w,
+        "{:.6} {:.6} {x:.6} {y:.6} {z:.6} {roll:.6} {pitch:.6} {yaw:.6}",
+        r.t1_s, r.t2_s
+    )
 }

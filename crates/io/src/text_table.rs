@@ -16,7 +16,18 @@ pub struct Row<'a> {
 pub fn read_rows(
     path: &Path,
     columns: usize,
+    visit: impl FnMut(Row) -> Result<(), ReadError>,
+) -> Result<(), ReadError> {
+    read_rows_and_comments(path, columns, visit, |_| Ok(()))
+}
+
+/// [`read_rows`], handing each `#` comment (its text after the `#`) to `comment`, whose error is
+/// reported at the comment's line.
+pub fn read_rows_and_comments(
+    path: &Path,
+    columns: usize,
     mut visit: impl FnMut(Row) -> Result<(), ReadError>,
+    mut comment: impl FnMut(&str) -> Result<(), String>,
 ) -> Result<(), ReadError> {
     let input = open_input(path)?;
     let mut lines = TextLines::new(input.reader, &input.name);
@@ -27,7 +38,11 @@ pub fn read_rows(
             message,
         };
         let trimmed = line.trim();
-        if trimmed.is_empty() || trimmed.starts_with('#') {
+        if let Some(text) = trimmed.strip_prefix('#') {
+            comment(text).map_err(err)?;
+            continue;
+        }
+        if trimmed.is_empty() {
             continue;
         }
         let fields: Vec<&str> = trimmed.split_ascii_whitespace().collect();

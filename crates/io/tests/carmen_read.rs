@@ -49,7 +49,41 @@ fn truncated_line_names_file_line_and_field() {
     let text = format!("{FLASER_3}FLASER 3 1.0 2.0\n");
     let e = parse(&text, &ReadOptions::default()).unwrap_err();
     assert!(e.starts_with("test.clf:2: "), "{e}");
-    assert!(e.contains("range reading 3"), "{e}");
+    assert!(e.contains("3 readings") && e.contains("truncated"), "{e}");
+}
+
+#[test]
+fn a_beam_count_that_disagrees_with_the_line_is_an_error_naming_the_count() {
+    // One reading more than the count says: read loosely, every later field shifts by one.
+    let one_more = "FLASER 2 1.0 2.0 3.0 0.5 0.25 0.1 0.5 0.25 0.1 100.25 host 1.5\n";
+    let e = parse(one_more, &ReadOptions::default()).unwrap_err();
+    assert!(e.starts_with("test.clf:1: FLASER: 2 readings"), "{e}");
+    let one_less = "FLASER 4 1.0 2.0 3.0 0.5 0.25 0.1 0.5 0.25 0.1 100.25 host 1.5\n";
+    assert!(parse(one_less, &ReadOptions::default()).is_err());
+}
+
+#[test]
+fn trailing_fields_are_an_error_for_every_record() {
+    let extra = [
+        format!("{} 7\n", FLASER_3.trim_end()),
+        "ODOM 1 2 0.5 0 0 0 99.0 h 99.0 7\n".to_string(),
+        format!("{} 7\n", ROBOTLASER1_4.trim_end()),
+    ];
+    for line in extra {
+        let e = parse(&line, &ReadOptions::default()).unwrap_err();
+        assert!(e.starts_with("test.clf:1: "), "{e}");
+    }
+}
+
+#[test]
+fn robotlaser1_remission_count_is_checked_against_the_line() {
+    // Two remissions announced, three present.
+    let line = ROBOTLASER1_4.replace(" 2 0.1 0.2 ", " 2 0.1 0.2 0.3 ");
+    let e = parse(&line, &ReadOptions::default()).unwrap_err();
+    assert!(e.contains("4 readings and 2 remissions"), "{e}");
+    // A reading count one short makes the last reading pose as the remission count.
+    let line = ROBOTLASER1_4.replace(" 0 4 1.0 5.6 2.5 0.0 2 ", " 0 3 1.0 5.6 2.5 0.0 2 ");
+    assert!(parse(&line, &ReadOptions::default()).is_err());
 }
 
 #[test]
@@ -86,12 +120,13 @@ fn absurd_beam_count_is_an_error_not_an_allocation() {
     assert!(e.contains("larger than"), "{e}");
 }
 
+const ROBOTLASER1_4: &str =
+    "ROBOTLASER1 0 -2.094395 4.188790 0.006136 5.600 0.010 0 4 1.0 5.6 2.5 0.0 2 0.1 0.2 \
+                0 0 0 1.5 2.5 0.3 0 0 0 0 0 1134864629.903219 host 0.5\n";
+
 #[test]
 fn robotlaser1_round_trips_through_the_writer() {
-    let line =
-        "ROBOTLASER1 0 -2.094395 4.188790 0.006136 5.600 0.010 0 4 1.0 5.6 2.5 0.0 2 0.1 0.2 \
-                0 0 0 1.5 2.5 0.3 0 0 0 0 0 1134864629.903219 host 0.5\n";
-    let log = parse(line, &ReadOptions::default()).unwrap();
+    let log = parse(ROBOTLASER1_4, &ReadOptions::default()).unwrap();
     let s = &log.scans[0];
     assert_eq!(
         s.valid,
@@ -124,5 +159,21 @@ proptest! {
         let mut line = kind.to_string();
         for n in nums { line.push_str(&format!(" {n}")); }
         let _ = parse(&line, &ReadOptions::default());
+    }
+
+    /// A well-formed FLASER record parses exactly, and the same record with its beam count off by
+    /// any amount is refused: no shifted fields, whatever the readings are.
+    #[test]
+    fn flaser_parses_exactly_or_not_at_all(ranges in proptest::collection::vec(0.0f32..90.0, 1..30),
+                                            off in -3i64..=3) {
+        let body: Vec<String> = ranges.iter().map(|r| format!("{r}")).collect();
+        let line = |n: i64| format!("FLASER {n} {} 1 2 0.5 1 2 0.5 42.125 host 43.5\n", body.join(" "));
+        let log = parse(&line(ranges.len() as i64), &ReadOptions::default()).unwrap();
+        prop_assert_eq!(&log.scans[0].timestamp_text, "42.125");
+        prop_assert_eq!(log.scans[0].ranges_m.len(), ranges.len());
+        let n = ranges.len() as i64 + off;
+        if off != 0 && n >= 0 {
+            prop_assert!(parse(&line(n), &ReadOptions::default()).is_err());
+        }
     }
 }

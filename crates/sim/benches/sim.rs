@@ -1,4 +1,4 @@
-//! Simulator speed (issue 3 targets): the real-time factor of the office survey with the XV-11
+//! Simulator speed: the real-time factor of the office survey with the XV-11
 //! at 1 kHz physics, and ray casting against a 200-wall world.
 //!
 //! Criterion reports throughput: for `survey` the elements are physics steps (1 ms each), so the
@@ -8,14 +8,14 @@
 //! For `dynamics` the elements are RK4 steps of the rigid body and motors alone.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use plumbline_sim::dynamics::{BodyState, Dynamics, Forcing};
 use plumbline_sim::math::Vec3;
-use plumbline_sim::nearby::Nearby;
-use plumbline_sim::plan::{Plan, PlanLimits};
+use plumbline_sim::runner::plan::{Plan, PlanLimits};
 use plumbline_sim::runner::{run, Discard, Pilot, SimConfig};
-use plumbline_sim::scene::Scene;
 use plumbline_sim::sensors::lidar::LidarProfile;
+use plumbline_sim::vehicle::dynamics::{BodyState, Dynamics, Forcing};
 use plumbline_sim::vehicle::VehicleParams;
+use plumbline_sim::world::nearby::Nearby;
+use plumbline_sim::world::scene::Scene;
 use plumbline_sim::world::World;
 use std::hint::black_box;
 

@@ -6,7 +6,9 @@ use plumbline_core::matching::OdometryConfig;
 use plumbline_core::msgs::{FailsafeReason, FlightMode, PilotInput};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
-use plumbline_sim::onboard_link::{autopilot_for, FlightLog, OnboardLink, Script, XV11_BEAMS};
+use plumbline_sim::runner::onboard_link::{
+    autopilot_for, FlightLog, OnboardLink, Script, XV11_BEAMS,
+};
 use plumbline_sim::runner::{run, Pilot, Recorder, SimConfig, StateSample, Status};
 use plumbline_sim::scenario::score::{self, horizontal_error};
 use plumbline_sim::sensors::lidar::LidarProfile;

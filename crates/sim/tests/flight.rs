@@ -4,7 +4,7 @@
 use plumbline_core::msgs::{ImuSample, SonarSample};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
-use plumbline_sim::plan::{Plan, PlanLimits};
+use plumbline_sim::runner::plan::{Plan, PlanLimits};
 use plumbline_sim::runner::{
     run, Discard, Outcome, Pilot, Recorder, SetupError, SimConfig, Status, TruthPose,
 };

@@ -7,7 +7,9 @@
 
 use plumbline_core::matching::OdometryConfig;
 use plumbline_core::msgs::{FlightMode, MotorCommands, PilotInput};
-use plumbline_sim::onboard_link::{autopilot_for, FlightLog, OnboardLink, Script, XV11_BEAMS};
+use plumbline_sim::runner::onboard_link::{
+    autopilot_for, FlightLog, OnboardLink, Script, XV11_BEAMS,
+};
 use plumbline_sim::runner::{
     run, FlightSoftware, Pilot, Recorder, SensorFrame, SimConfig, StateSample, Status,
 };

@@ -1,6 +1,7 @@
 //! `plumbline lidar decode --device D CAPTURE [--out LOG]`.
 
-use super::{require_frames, summary_json};
+use super::{require_frames, summary_json, BAUD_RANGE};
+use crate::numeric::within;
 use crate::report::{print_summary, CliError, CliResult};
 use clap::Args;
 use plumbline_io::carmen::write_robotlaser1;
@@ -23,7 +24,8 @@ pub struct DecodeArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Line speed the capture was taken at; stamps scans by byte position (default: the device's).
-    #[arg(long)]
+    /// Valid range: [1200, 4000000].
+    #[arg(long, value_parser = within::<u32>(BAUD_RANGE))]
     baud: Option<u32>,
     /// Print the summary as one JSON object.
     #[arg(long)]

@@ -5,10 +5,14 @@ mod decode;
 mod plot;
 mod record;
 
+use crate::numeric::Range;
 use crate::report::{CliError, CliResult};
 use clap::{Args, Subcommand};
 use plumbline_io::serial::{DecodeSummary, Device};
 use serde_json::{json, Map, Value};
+
+/// Line speeds a serial lidar can be run at; outside this, stamps by byte position mean nothing.
+const BAUD_RANGE: Range = Range::closed(1200.0, 4_000_000.0);
 
 #[derive(Args)]
 pub struct LidarArgs {
@@ -48,6 +52,7 @@ fn summary_json(device: Device, summary: &DecodeSummary) -> Map<String, Value> {
         "out_of_order": s.out_of_order,
         "missing_packets": s.missing_packets,
         "overflow": s.overflow,
+        "implausible_revolutions": s.implausible,
         "rpm_median": summary.rpm_median,
         "invalid_beams": summary.invalid_beams,
     });
@@ -58,13 +63,28 @@ fn summary_json(device: Device, summary: &DecodeSummary) -> Map<String, Value> {
 }
 
 /// A capture with bytes but not one good frame is an error, not an empty log: the usual causes
-/// are the wrong `--device` or a capture taken at the wrong baud rate.
+/// are the wrong `--device` or a capture taken at the wrong baud rate. So is one whose frames
+/// pass their checks but make only revolutions the device cannot send (weak checks pass foreign
+/// bytes by chance); when most revolutions are like that, a warning says so.
 fn require_frames(what: &str, device: Device, summary: &DecodeSummary) -> CliResult {
-    if summary.stats.bytes > 0 && summary.stats.packets_ok == 0 {
+    let s = &summary.stats;
+    if s.bytes > 0 && s.packets_ok == 0 && s.implausible == 0 {
         return Err(CliError(format!(
             "{what}: {} bytes but no valid {device} frame (wrong --device, or the wrong baud rate?)",
-            summary.stats.bytes
+            s.bytes
         )));
+    }
+    let assembled = s.revolutions + s.implausible;
+    let verdict = format!(
+        "{what}: these bytes do not look like {device} data: {} of {assembled} revolutions plausible \
+         (speed, beams per turn, angles); is --device right?",
+        s.revolutions
+    );
+    if s.revolutions == 0 && s.implausible > 0 {
+        return Err(CliError(verdict));
+    }
+    if s.implausible > s.revolutions {
+        eprintln!("plumbline: WARNING: {verdict}");
     }
     Ok(())
 }

@@ -5,7 +5,8 @@
 //! is off leaves existing files as they were; from then on every chunk read and every scan is
 //! flushed as it comes, so a recording that is killed keeps what it had.
 
-use super::{require_frames, summary_json};
+use super::{require_frames, summary_json, BAUD_RANGE};
+use crate::numeric::{within, Range};
 use crate::report::{print_summary, CliError, CliResult};
 use clap::Args;
 use plumbline_io::carmen::write_robotlaser1;
@@ -24,14 +25,14 @@ pub struct RecordArgs {
     /// Serial port, e.g. /dev/ttyUSB0.
     #[arg(long)]
     port: String,
-    /// Line speed (default: the device's).
-    #[arg(long)]
+    /// Line speed (default: the device's). Valid range: [1200, 4000000].
+    #[arg(long, value_parser = within::<u32>(BAUD_RANGE))]
     baud: Option<u32>,
-    /// Seconds to record.
-    #[arg(long, default_value_t = 10.0)]
+    /// Seconds to record. Valid range: (0, 86400].
+    #[arg(long, default_value_t = 10.0, value_parser = within::<f64>(Range::above(0.0, 86400.0)))]
     duration: f64,
-    /// Seconds of silence after which the port counts as dead.
-    #[arg(long, default_value_t = 2.0)]
+    /// Seconds of silence after which the port counts as dead. Valid range: (0, 3600].
+    #[arg(long, default_value_t = 2.0, value_parser = within::<f64>(Range::above(0.0, 3600.0)))]
     idle_timeout: f64,
     /// Raw capture out.
     #[arg(long)]

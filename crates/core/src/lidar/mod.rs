@@ -21,6 +21,11 @@
 //! | [`rplidar::RplidarDecoder`]`<800>` | 4880 | 4816 (`RplidarRevolution<800>`) |
 //!
 //! Converting to a `Scan<360>` takes another 5776 bytes, on the caller's stack.
+//!
+//! Frame checks are not enough where they are weak (two check bits per RPLIDAR node: a quarter
+//! of random 5-byte windows pass), so each decoder also refuses revolutions that are physically
+//! implausible for its device and counts them in [`DecodeStats::implausible`] (limits in each
+//! module).
 
 pub mod rplidar;
 pub mod scip;
@@ -54,6 +59,11 @@ pub struct DecodeStats {
     pub missing_packets: u32,
     /// Readings that did not fit the revolution buffer (RPLIDAR, SCIP with too many steps).
     pub overflow: u32,
+    /// Revolutions assembled from frames that passed their checks but that the device cannot
+    /// have sent (a speed outside its range, too few beams for a turn, angles that jump or sweep
+    /// more than a turn, steps beyond the sensor): not handed out. Bytes from another device or
+    /// random bytes pass weak frame checks by chance; many of these mean the wrong device.
+    pub implausible: u32,
 }
 
 /// What every decoder offers, so drivers, tests and fuzzers treat the devices alike.

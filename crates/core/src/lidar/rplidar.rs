@@ -11,6 +11,12 @@
 //! is beyond 360 degrees. After a rejected node the decoder slides one byte at a time until
 //! nodes pass again. A descriptor (which no node can be mistaken for: its second byte has the
 //! check bit clear) restarts the stream. Recording may start mid-scan, so it is optional.
+//!
+//! Two check bits pass a quarter of random windows, so a revolution is handed out only when it
+//! is one an RPLIDAR can send: at least [`MIN_NODES_PER_REV`] nodes (at the A1/A2 sample rates,
+//! slower than about 1200 rpm; a partial first or last revolution shorter than that is dropped
+//! too), each node at most [`MAX_NODE_STEP_DEG`] clockwise of the one before, and all of them
+//! sweeping at most one turn. Random bytes or another device's stream fail all three.
 
 use super::DecodeStats;
 use crate::geom::normalize_angle;
@@ -19,6 +25,13 @@ use crate::scan::{Beam, Scan};
 pub const DESCRIPTOR: [u8; 7] = [0xA5, 0x5A, 0x05, 0x00, 0x00, 0x40, 0x81];
 const NODE_LEN: usize = 5;
 const FULL_TURN_Q6: u16 = 360 * 64;
+
+/// Fewest nodes in a revolution: at 2000-4000 samples a second (A1, A2 standard scan) a turn of
+/// fewer would be faster than the 15 Hz (900 rpm) the fastest model reaches, with margin.
+pub const MIN_NODES_PER_REV: usize = 100;
+/// Largest clockwise step between consecutive nodes: about 1 degree in normal running, 3.6 at
+/// the fewest nodes a turn; more room for a node or two lost to bad check bits.
+pub const MAX_NODE_STEP_DEG: u16 = 15;
 
 /// One measurement as sent.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -88,6 +101,23 @@ impl<const N: usize> Default for RplidarRevolution<N> {
 impl<const N: usize> RplidarRevolution<N> {
     pub fn nodes(&self) -> &[Node] {
         &self.nodes[..self.len]
+    }
+
+    /// Whether an RPLIDAR can have sent these nodes as one revolution (limits in the module docs).
+    pub fn is_plausible(&self) -> bool {
+        let nodes = self.nodes();
+        if nodes.len() < MIN_NODES_PER_REV {
+            return false;
+        }
+        let mut swept_q6: u32 = 0;
+        for w in nodes.windows(2) {
+            let step = (w[1].angle_q6 + FULL_TURN_Q6 - w[0].angle_q6) % FULL_TURN_Q6;
+            if step > MAX_NODE_STEP_DEG * 64 {
+                return false;
+            }
+            swept_q6 += u32::from(step);
+        }
+        swept_q6 <= u32::from(FULL_TURN_Q6)
     }
 
     /// RPM implied by the node count and the sample period.
@@ -213,8 +243,13 @@ impl<const N: usize> RplidarDecoder<N> {
         if self.current.len == 0 {
             return None;
         }
+        let rev = core::mem::take(&mut self.current);
+        if !rev.is_plausible() {
+            self.stats.implausible += 1;
+            return None;
+        }
         self.stats.revolutions += 1;
-        Some(core::mem::take(&mut self.current))
+        Some(rev)
     }
 }
 
@@ -288,13 +323,57 @@ mod tests {
     #[test]
     fn zero_distance_is_an_invalid_beam_and_overflow_is_counted() {
         let mut bytes = rplidar_descriptor();
-        bytes.extend(rplidar_node(true, 10, 0.0, 0.0));
-        bytes.extend(rplidar_node(false, 10, 1.0, 500.0));
+        for deg in 0..360 {
+            let mm = if deg == 0 { 0.0 } else { 500.0 };
+            bytes.extend(rplidar_node(deg == 0, 10, deg as f64, mm));
+        }
         let (revs, _) = decode(&bytes);
         let scan = revs[0].to_scan(&RplidarConfig::A1);
-        assert_eq!((scan.len(), scan.valid_count()), (2, 1));
-        let mut d = RplidarDecoder::<1>::new();
+        assert_eq!((scan.len(), scan.valid_count()), (360, 359));
+        let mut d = RplidarDecoder::<200>::new();
         assert!(bytes.iter().all(|&b| d.push(b).is_none()));
-        assert_eq!(d.stats().overflow, 1);
+        assert_eq!(d.stats().overflow, 160);
+    }
+
+    #[test]
+    fn revolutions_an_rplidar_cannot_send_are_counted_not_handed_out() {
+        // Too few nodes: a "revolution" of 50 nodes would be a 2400 rpm turn.
+        let mut short = rplidar_descriptor();
+        for deg in 0..50u32 {
+            short.extend(rplidar_node(deg == 0, 47, deg as f64 * 7.2, 1000.0));
+        }
+        // Angles that jump: nodes 30 degrees apart.
+        let mut jumpy = rplidar_descriptor();
+        for k in 0..360u32 {
+            jumpy.extend(rplidar_node(k == 0, 47, (k * 30 % 360) as f64, 1000.0));
+        }
+        // More than a turn: 1 degree a node for 400 nodes.
+        let mut sweeping = rplidar_descriptor();
+        for k in 0..400u32 {
+            sweeping.extend(rplidar_node(k == 0, 47, (k % 360) as f64, 1000.0));
+        }
+        for bytes in [short, jumpy, sweeping] {
+            let (revs, stats) = decode(&bytes);
+            assert!(revs.is_empty());
+            assert_eq!((stats.revolutions, stats.implausible), (0, 1));
+        }
+    }
+
+    #[test]
+    fn random_bytes_give_no_plausible_revolution() {
+        // A fixed xorshift stream: reproducible, and as good as random for two check bits.
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        let bytes: Vec<u8> = (0..200_000)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                x as u8
+            })
+            .collect();
+        let (revs, stats) = decode(&bytes);
+        assert!(stats.packets_ok > 10_000, "{stats:?}");
+        assert!(stats.implausible > 1_000, "{stats:?}");
+        assert_eq!(revs.len(), 0);
     }
 }

@@ -123,6 +123,7 @@ struct Request {
     streamed: bool,
     chars: u8,
     start: u16,
+    end: u16,
     cluster: u16,
     values: usize,
 }
@@ -163,13 +164,14 @@ fn parse_echo(line: &[u8]) -> Option<Request> {
         streamed,
         chars: chars.chars() as u8,
         start,
+        end,
         cluster,
         values,
     })
 }
 
-/// Bytes in, scans out. State: one line, one [`ScipScan`] (4 bytes a value), about 3.2 KB for
-/// `N = 769`.
+/// Bytes in, scans out, for a sensor of `N` steps (URG-04LX: 769; replies for steps beyond are
+/// implausible). State: one line, one [`ScipScan`] (4 bytes a value), 3.2 KB for `N = 769`.
 #[derive(Clone, Debug)]
 pub struct ScipDecoder<const N: usize> {
     line: [u8; MAX_LINE],
@@ -262,13 +264,17 @@ impl<const N: usize> ScipDecoder<N> {
     fn on_line(&mut self, line: &[u8]) {
         match self.state {
             State::Echo => match parse_echo(line) {
-                Some(req) if req.values <= N => {
-                    self.request = req;
-                    self.state = State::Status;
-                }
-                Some(_) => {
+                Some(req) if req.values > N => {
                     self.stats.overflow += 1;
                     self.state = State::Skip;
+                }
+                Some(req) if usize::from(req.end) >= N => {
+                    self.stats.implausible += 1;
+                    self.state = State::Skip;
+                }
+                Some(req) => {
+                    self.request = req;
+                    self.state = State::Status;
                 }
                 None => self.state = State::Skip,
             },

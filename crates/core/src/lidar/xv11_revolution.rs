@@ -8,6 +8,11 @@
 //! `hand_in_box.bin`), the decoder hands out shorter revolutions with invalid beams instead of
 //! merging two sweeps or shifting beams. Packets that arrive with a lower index without a wrap
 //! are counted as `out_of_order`.
+//!
+//! A revolution whose mean speed field is outside [`MIN_RPM`, `MAX_RPM`] is not one an XV-11
+//! sends (its motor is held near 300 rpm; spin-up and spin-down pass lower speeds) and is counted
+//! as implausible instead of handed out. The packet checksum already refuses nearly all foreign
+//! bytes; this catches the rest, and corrupt speed fields.
 
 use super::xv11::{Packet, PacketParser, Reading, PACKETS_PER_REV, READINGS_PER_PACKET};
 use super::DecodeStats;
@@ -17,6 +22,10 @@ use crate::scan::{Beam, Scan};
 pub const BEAMS: usize = PACKETS_PER_REV * READINGS_PER_PACKET;
 const ALL_PACKETS: u128 = (1u128 << PACKETS_PER_REV) - 1;
 const DEG_TO_RAD: f32 = core::f32::consts::PI / 180.0;
+/// Slowest mean speed of a revolution handed out, rpm: below it the motor is stalled, not turning.
+pub const MIN_RPM: f32 = 20.0;
+/// Fastest, rpm: twice the speed the motor is regulated to.
+pub const MAX_RPM: f32 = 600.0;
 /// An index drop larger than this is a new revolution, a smaller one an out-of-order packet.
 const WRAP_DROP: u8 = (PACKETS_PER_REV / 2) as u8;
 
@@ -142,7 +151,7 @@ impl Assembler {
         if self.current.present != 0 {
             let wrapped = self.last_index > p.index.saturating_add(WRAP_DROP);
             if wrapped || self.current.has_packet(usize::from(p.index)) {
-                closed = Some(self.take(stats));
+                closed = self.take(stats);
             } else if p.index < self.last_index {
                 stats.out_of_order += 1;
             }
@@ -150,21 +159,32 @@ impl Assembler {
         self.current.add(p);
         self.last_index = p.index;
         if self.current.is_complete() {
-            closed = Some(self.take(stats));
+            closed = self.take(stats);
         }
         closed
     }
 
     /// Hands out what has arrived of the current revolution (end of stream), if anything.
     pub fn finish(&mut self, stats: &mut DecodeStats) -> Option<Revolution> {
-        (self.current.present != 0).then(|| self.take(stats))
+        if self.current.present == 0 {
+            return None;
+        }
+        self.take(stats)
     }
 
-    fn take(&mut self, stats: &mut DecodeStats) -> Revolution {
+    /// Closes the current revolution: handed out, or counted as implausible.
+    fn take(&mut self, stats: &mut DecodeStats) -> Option<Revolution> {
         let rev = core::mem::take(&mut self.current);
+        if rev
+            .rpm()
+            .is_some_and(|rpm| !(MIN_RPM..=MAX_RPM).contains(&rpm))
+        {
+            stats.implausible += 1;
+            return None;
+        }
         stats.revolutions += 1;
         stats.missing_packets += PACKETS_PER_REV as u32 - rev.packets();
-        rev
+        Some(rev)
     }
 }
 
@@ -306,5 +326,18 @@ mod tests {
         assert_eq!(revs[0].packets(), 30);
         assert_eq!(revs[0].to_scan(0.0).valid_count(), 120);
         assert_eq!(stats.missing_packets, 60);
+    }
+
+    #[test]
+    fn a_speed_the_motor_cannot_turn_at_is_implausible() {
+        for rpm in [0u16, 10, 700, 1000] {
+            let (revs, stats) = decode(&xv11_revolution(rpm * 64, |_| 1500));
+            assert!(revs.is_empty(), "{rpm} rpm");
+            assert_eq!((stats.implausible, stats.revolutions), (1, 0), "{rpm} rpm");
+        }
+        for rpm in [50u16, 300, 350] {
+            let (revs, stats) = decode(&xv11_revolution(rpm * 64, |_| 1500));
+            assert_eq!((revs.len(), stats.implausible), (1, 0), "{rpm} rpm");
+        }
     }
 }

@@ -4,6 +4,13 @@
 //! vehicle stays near a keyframe its error does not grow scan by scan; a new keyframe is taken
 //! once the vehicle has moved far enough that overlap starts to suffer. The initial guess is a
 //! caller's prior (wheel odometry, IMU) or, lidar-only, the last motion repeated.
+//!
+//! When matches fail one after another the last motion is not repeated for ever: a lidar that
+//! stops returning (spinning down, covered, blinded) says nothing about the vehicle still moving,
+//! and repeating a last, possibly bad, motion turns a standing sensor into a spinning one. Each
+//! failed scan in a row carries the pose forward by a shrinking fraction of the last motion
+//! ([`OdometryConfig::lost_motion_decay`]), so however long the sensor stays lost the predicted
+//! pose moves at most `1 / (1 - decay)` times the last motion, and comes to rest.
 
 use super::{MatchConfig, MatchError, MatchResult, ScanMatcher};
 use crate::geom::{Pose2, Vec2};
@@ -18,6 +25,10 @@ pub struct OdometryConfig {
     pub keyframe_angle_rad: f32,
     /// …or when fewer than this fraction of points still find a partner in it.
     pub keyframe_min_inlier_ratio: f32,
+    /// While lost (matches failing in a row, no prior), each failed scan moves the pose by this
+    /// fraction of the motion used for the one before; the first failed scan by the whole last
+    /// motion. In [0, 1): 0 stops at once, 0.5 bounds the whole excursion to twice the last motion.
+    pub lost_motion_decay: f32,
 }
 
 impl Default for OdometryConfig {
@@ -27,6 +38,7 @@ impl Default for OdometryConfig {
             keyframe_distance_m: 0.3,
             keyframe_angle_rad: 0.25,
             keyframe_min_inlier_ratio: 0.6,
+            lost_motion_decay: 0.5,
         }
     }
 }
@@ -41,7 +53,8 @@ pub enum OdometryStep {
         result: MatchResult,
         new_keyframe: bool,
     },
-    /// The match failed; the pose was carried forward by the prediction alone.
+    /// The match failed; the pose was carried forward by the prediction alone (a decaying one
+    /// when failures follow each other): the pose at this scan is not a measurement.
     Predicted {
         error: MatchError,
         /// This scan became the keyframe, so one bad keyframe cannot stall the odometry; it
@@ -67,7 +80,8 @@ pub struct LidarOdometry<const N: usize> {
     matcher: ScanMatcher<N>,
     keyframe_pose: Pose2,
     pose: Pose2,
-    /// Motion over the last scan interval, the lidar-only prediction for the next one.
+    /// Motion over the last scan interval, the lidar-only prediction for the next one; shrunk by
+    /// `lost_motion_decay` after each failed match.
     last_motion: Pose2,
     keyframes_taken: u32,
 }
@@ -152,6 +166,7 @@ impl<const N: usize> LidarOdometry<N> {
             }
             Err(error) => {
                 self.pose = predicted;
+                self.last_motion = fraction_of(self.last_motion, self.lost_decay());
                 let restarted = !matches!(
                     error,
                     MatchError::TooFewPoints { .. } | MatchError::BeamsNotInAngularOrder { .. }
@@ -163,5 +178,120 @@ impl<const N: usize> LidarOdometry<N> {
                 OdometryStep::Predicted { error, restarted }
             }
         }
+    }
+
+    /// The configured decay, kept in [0, 1) so that a bad value cannot make the prediction grow.
+    fn lost_decay(&self) -> f32 {
+        let d = self.config.lost_motion_decay;
+        if d.is_finite() {
+            d.clamp(0.0, MAX_LOST_DECAY)
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The largest decay accepted: below 1 so that the excursion while lost stays bounded.
+const MAX_LOST_DECAY: f32 = 0.95;
+
+/// `k` times a small motion, component by component (for the few-degree motions between scans
+/// this is the motion at `k` times the speed, which is all a decaying prediction needs).
+fn fraction_of(motion: Pose2, k: f32) -> Pose2 {
+    Pose2::new(motion.x * k, motion.y * k, motion.theta * k)
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::scan::Beam;
+
+    /// A scan with too few valid beams to match: what a lidar spinning down or covered sends.
+    fn blind_scan(stamp_s: f64) -> Scan<360> {
+        let mut scan = Scan::new(stamp_s);
+        for k in 0..360 {
+            let beam = if k < 5 {
+                Beam::new((k as f32).to_radians(), 2.0)
+            } else {
+                Beam::invalid((k as f32).to_radians())
+            };
+            scan.push(beam).unwrap();
+        }
+        scan
+    }
+
+    #[test]
+    fn a_lost_sensor_comes_to_rest_within_a_bounded_excursion() {
+        for decay in [0.0f32, 0.5, 0.9, 2.0, f32::NAN] {
+            let config = OdometryConfig {
+                lost_motion_decay: decay,
+                ..OdometryConfig::default()
+            };
+            let mut odometry = LidarOdometry::<360>::new(config);
+            // As if the last match had turned 0.5 rad and moved 0.1 m: the worst kind of last
+            // motion to repeat.
+            odometry.last_motion = Pose2::new(0.1, 0.0, 0.5);
+            odometry.matcher.set_reference(&room(0.0)).unwrap();
+            let mut turned = 0.0f32;
+            let mut last_step = f32::INFINITY;
+            for k in 0..200 {
+                let before = odometry.pose();
+                let step = odometry.update(&blind_scan(1.0 + k as f64 * 0.1), None);
+                assert!(matches!(step, OdometryStep::Predicted { .. }));
+                let step_turn = before.between(odometry.pose()).theta.abs();
+                assert!(step_turn <= last_step + 1e-6, "the prediction never grows");
+                last_step = step_turn;
+                turned += step_turn;
+            }
+            let bound = 0.5
+                / (1.0
+                    - if decay.is_finite() {
+                        decay.clamp(0.0, MAX_LOST_DECAY)
+                    } else {
+                        0.0
+                    });
+            assert!(
+                turned <= bound + 1e-4,
+                "decay {decay}: turned {turned} rad, bound {bound}"
+            );
+            assert!(
+                last_step < 1e-3,
+                "decay {decay}: still turning {last_step} rad a scan"
+            );
+        }
+    }
+
+    #[test]
+    fn one_failed_scan_is_bridged_by_the_whole_last_motion() {
+        let mut odometry = LidarOdometry::<360>::new(OdometryConfig::default());
+        odometry.matcher.set_reference(&room(0.0)).unwrap();
+        odometry.last_motion = Pose2::new(0.05, 0.0, 0.02);
+        odometry.update(&blind_scan(1.0), None);
+        let p = odometry.pose();
+        assert!(
+            (p.x - 0.05).abs() < 1e-6 && (p.theta - 0.02).abs() < 1e-6,
+            "{p:?}"
+        );
+    }
+
+    /// A 360-beam scan of a 6 m x 4 m box taken from its centre, turned by `theta`.
+    fn room(theta: f32) -> Scan<360> {
+        let mut scan = Scan::new(0.0);
+        for k in 0..360 {
+            let a = (k as f32).to_radians();
+            let (s, c) = libm::sincosf(a + theta);
+            let wx = if c.abs() > 1e-6 {
+                3.0 / c.abs()
+            } else {
+                f32::INFINITY
+            };
+            let wy = if s.abs() > 1e-6 {
+                2.0 / s.abs()
+            } else {
+                f32::INFINITY
+            };
+            scan.push(Beam::new(a, wx.min(wy))).unwrap();
+        }
+        scan
     }
 }

@@ -74,6 +74,36 @@ impl<'a> Fields<'a> {
         Ok(n)
     }
 
+    /// Fields not yet taken; the counts in a record are checked against this before trusting them.
+    fn remaining(&self) -> usize {
+        self.inner.clone().count()
+    }
+
+    /// A record's beam count fixes how many fields follow it; a count that disagrees with the line
+    /// would otherwise shift every later field (a range read as a pose, a pose as a timestamp).
+    fn expect_remaining(&self, record: &str, counts: &str, expected: usize) -> Result<(), String> {
+        let found = self.remaining();
+        if found == expected {
+            return Ok(());
+        }
+        Err(format!(
+            "{record}: {counts} make {expected} fields after field {}, but the line has {found}; \
+             the count disagrees with the readings (truncated or corrupted line?)",
+            self.taken + 1
+        ))
+    }
+
+    /// Every field must have been read: trailing fields mean the record is not what it claims.
+    fn end(&mut self, record: &str) -> Result<(), String> {
+        match self.inner.next() {
+            None => Ok(()),
+            Some(extra) => Err(format!(
+                "{record}: unexpected field {} {extra:?} after the logger timestamp",
+                self.taken + 2
+            )),
+        }
+    }
+
     /// Range readings; NaN or infinite readings are kept and become invalid beams.
     fn ranges(&mut self, n: usize) -> Result<Vec<f32>, String> {
         (0..n)
@@ -109,10 +139,13 @@ const MAX_BEAMS: usize = 100_000;
 
 fn parse_flaser(f: &mut Fields, opts: &ReadOptions) -> Result<LaserRecord, String> {
     let n = f.count("number of readings", MAX_BEAMS)?;
+    // readings, robot pose (3), odometry pose (3), ipc_timestamp hostname logger_timestamp
+    f.expect_remaining("FLASER", &format!("{n} readings"), n + 9)?;
     let ranges = f.ranges(n)?;
     let pose = f.pose("robot pose")?;
     f.pose("odometry pose")?;
     let (t, text) = f.stamps()?;
+    f.end("FLASER")?;
     let (start, inc) = opts.fov.beam_layout(n);
     let mut rec = LaserRecord::new(t, start, inc, opts.flaser_max_range_m, ranges);
     rec.timestamp_text = text;
@@ -129,8 +162,23 @@ fn parse_robotlaser1(f: &mut Fields) -> Result<LaserRecord, String> {
     f.finite("accuracy")?;
     f.text("remission_mode")?;
     let n = f.count("number of readings", MAX_BEAMS)?;
+    // after the readings: the remission count, the remissions, laser pose (3), robot pose (3),
+    // tv rv forward_safety_dist side_safety_dist turn_axis, and the three stamps
+    const CLOSING_FIELDS: usize = 14;
+    if f.remaining() < n + 1 + CLOSING_FIELDS {
+        f.expect_remaining(
+            "ROBOTLASER1",
+            &format!("{n} readings"),
+            n + 1 + CLOSING_FIELDS,
+        )?;
+    }
     let ranges = f.ranges(n)?;
     let k = f.count("number of remissions", MAX_BEAMS)?;
+    f.expect_remaining(
+        "ROBOTLASER1",
+        &format!("{n} readings and {k} remissions"),
+        k + CLOSING_FIELDS,
+    )?;
     for i in 0..k {
         f.num::<f32>(&format!("remission {}", i + 1))?;
     }
@@ -146,6 +194,7 @@ fn parse_robotlaser1(f: &mut Fields) -> Result<LaserRecord, String> {
         f.finite(what)?;
     }
     let (t, text) = f.stamps()?;
+    f.end("ROBOTLASER1")?;
     let max_range = if max_range > 0.0 {
         max_range
     } else {
@@ -163,5 +212,6 @@ fn parse_odom(f: &mut Fields) -> Result<OdomRecord, String> {
         f.finite(what)?;
     }
     let (timestamp_s, _) = f.stamps()?;
+    f.end("ODOM")?;
     Ok(OdomRecord { timestamp_s, pose })
 }

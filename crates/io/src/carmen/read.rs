@@ -67,6 +67,8 @@ pub struct ReadStats {
 #[derive(Clone, Debug, Default)]
 pub struct CarmenLog {
     pub scans: Vec<LaserRecord>,
+    /// The 1-based line each scan was read from, so later checks can name it.
+    pub scan_lines: Vec<usize>,
     pub odometry: Vec<OdomRecord>,
     pub params: Vec<(String, String)>,
     pub stats: ReadStats,
@@ -122,6 +124,11 @@ impl<R: BufRead> LogReader<R> {
     /// What has been read so far.
     pub fn stats(&self) -> &ReadStats {
         &self.stats
+    }
+
+    /// The 1-based line of the record last returned, so later checks can name it.
+    pub fn line_no(&self) -> usize {
+        self.lines.line_no()
     }
 
     /// The next scan, odometry or parameter record; `None` at the end of the log.
@@ -208,7 +215,10 @@ fn collect_log<R: BufRead>(mut reader: LogReader<R>) -> Result<CarmenLog, ReadEr
     let mut log = CarmenLog::default();
     while let Some(item) = reader.next_item()? {
         match item {
-            LogItem::Scan(rec) => log.scans.push(rec),
+            LogItem::Scan(rec) => {
+                log.scans.push(rec);
+                log.scan_lines.push(reader.line_no());
+            }
             LogItem::Odom(o) => log.odometry.push(o),
             LogItem::Param(k, v) => log.params.push((k, v)),
         }

@@ -222,13 +222,23 @@ mod tests {
 
     #[test]
     fn rplidar_nodes_land_in_whole_degree_bins() {
-        let bytes = [
-            0xA5, 0x5A, 0x05, 0x00, 0x00, 0x40, 0x81, // standard-scan response descriptor
-            0xBD, 0x01, 0x00, 0xA0, 0x0F, // S, quality 47, 0 deg, 1000 mm
-            0xBE, 0x01, 0x2D, 0x08, 0x11, // quality 47, 90 deg clockwise, 1090 mm
-        ];
+        // A standard-scan response descriptor, then a node a degree clockwise, quality 47; only
+        // 0 deg (1000 mm) and 90 deg (1090 mm) return.
+        let mut bytes = vec![0xA5, 0x5A, 0x05, 0x00, 0x00, 0x40, 0x81];
+        for deg in 0..360u16 {
+            let start = u8::from(deg == 0);
+            let angle = (deg * 64) << 1 | 1;
+            let mm: u16 = match deg {
+                0 => 1000,
+                90 => 1090,
+                _ => 0,
+            };
+            bytes.push(47 << 2 | (1 - start) << 1 | start);
+            bytes.extend((angle).to_le_bytes());
+            bytes.extend((mm * 4).to_le_bytes());
+        }
         let (scans, summary) = decode_capture(Device::Rplidar, &bytes, 115_200).unwrap();
-        assert_eq!((scans.len(), summary.stats.packets_ok), (1, 2));
+        assert_eq!((scans.len(), summary.stats.packets_ok), (1, 360));
         let rec = &scans[0].record;
         assert_eq!(rec.beam_count(), 360);
         assert_eq!((rec.valid[179], rec.ranges_m[179]), (true, 1.0));

@@ -3,12 +3,12 @@
 //! the hold error and the recovery. `hold-people` lets the world's people walk through the
 //! scans. With the test pilot, `hold` is a sensor-log generator: it hovers over the start.
 
+use super::flight::{Controller, Entry, Flight, Options, ScenarioError};
 use super::onboard::{self, ARM_AT_S};
-use super::{Controller, Entry, Flight, Options, ScenarioError};
 use crate::disturb::Push;
 use crate::math::Vec3;
-use crate::onboard_link::Script;
-use crate::plan::{Plan, PlanLimits};
+use crate::runner::onboard_link::Script;
+use crate::runner::plan::{Plan, PlanLimits};
 use crate::runner::SimConfig;
 
 pub(super) const ENTRY: Entry = Entry {

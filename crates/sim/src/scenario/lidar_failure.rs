@@ -1,9 +1,9 @@
 //! `lidar-failure`: the lidar stops delivering revolutions 10 s into the flight; the onboard
 //! stack raises "lidar lost", holds on the IMU for a while, then lands.
 
+use super::flight::{Entry, Flight, Options, ScenarioError};
 use super::onboard::{self, ARM_AT_S};
-use super::{Entry, Flight, Options, ScenarioError};
-use crate::onboard_link::Script;
+use crate::runner::onboard_link::Script;
 use crate::runner::SimConfig;
 
 pub(super) const ENTRY: Entry = Entry {

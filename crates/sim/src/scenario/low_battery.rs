@@ -1,9 +1,9 @@
 //! `land-on-low-battery`: the onboard stack takes off on a nearly empty pack and must land
 //! when the loaded voltage falls below its threshold, before the pack is exhausted.
 
+use super::flight::{Entry, Flight, Options, ScenarioError};
 use super::onboard::{self, ARM_AT_S};
-use super::{Entry, Flight, Options, ScenarioError};
-use crate::onboard_link::Script;
+use crate::runner::onboard_link::Script;
 use crate::runner::SimConfig;
 
 pub(super) const ENTRY: Entry = Entry {

@@ -13,11 +13,14 @@
 //!   lands.
 //!
 //! Adding a scenario is one new file and one catalogue entry: write `scenario/NAME.rs` with a
-//! `pub(super) const ENTRY: Entry` whose `prepare` adjusts the [`SimConfig`] and returns the
-//! [`Flight`] (the test pilot with a [`Plan`], or the onboard stack through
-//! [`onboard::flight`]), then add `NAME::ENTRY` to [`CATALOGUE`]. Scoring needs no new code
-//! unless the scenario judges something new: then it goes in [`score`], next to the rest.
+//! `pub(super) const ENTRY: Entry` (its parts come from `super::flight`) whose `prepare`
+//! adjusts the [`SimConfig`](crate::runner::SimConfig) and returns the [`Flight`]: the test
+//! pilot with a [`Plan`](crate::runner::plan::Plan) ([`Flight::test_pilot`]), or the onboard
+//! stack (`onboard::setup` and `onboard::flight` do the common part). Then declare the module
+//! here and add `NAME::ENTRY` to [`CATALOGUE`]. Scoring needs no new code unless the scenario
+//! judges something new: then it goes in [`score`], next to the rest.
 
+mod flight;
 pub mod hold;
 pub mod lidar_failure;
 pub mod low_battery;
@@ -25,17 +28,10 @@ pub mod onboard;
 pub mod score;
 pub mod survey;
 
-use crate::disturb::Push;
-use crate::onboard_link::FlightLog;
-use crate::plan::Plan;
-use crate::runner::{self, Outcome, Pilot, Recorder, SetupError, SimConfig};
-use crate::world::WorldError;
-use score::{Judge, Score};
-use std::cell::RefCell;
-use std::rc::Rc;
+pub use flight::{fly, Controller, Entry, Flight, Options, Report, ScenarioError, Tuning};
 
 /// Every scenario, as named on the command line.
-pub const CATALOGUE: [Entry; 5] = [
+pub static CATALOGUE: [Entry; 5] = [
     survey::ENTRY,
     hold::ENTRY,
     hold::WITH_PEOPLE,
@@ -46,202 +42,4 @@ pub const CATALOGUE: [Entry; 5] = [
 /// The scenario called `name`.
 pub fn find(name: &str) -> Option<&'static Entry> {
     CATALOGUE.iter().find(|e| e.name == name)
-}
-
-/// One scenario of the catalogue.
-#[derive(Clone, Copy)]
-pub struct Entry {
-    pub name: &'static str,
-    /// One line for help text.
-    pub about: &'static str,
-    prepare: fn(&Options, &mut SimConfig) -> Result<Flight, ScenarioError>,
-}
-
-/// Who flies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Controller {
-    /// The onboard cascade of PID loops.
-    Pid,
-    /// Model-reference adaptive control with pseudo-control hedging (not implemented yet).
-    Mrac,
-    /// The simulator's ground-truth pilot.
-    TestPilot,
-}
-
-impl Controller {
-    pub fn name(self) -> &'static str {
-        match self {
-            Controller::Pid => "pid",
-            Controller::Mrac => "mrac",
-            Controller::TestPilot => "test-pilot",
-        }
-    }
-}
-
-/// The onboard PID gains.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Tuning {
-    /// The defaults.
-    #[default]
-    Aggressive,
-    /// Slower outer loops (seed 000's energy hypothesis compares the two).
-    Soft,
-}
-
-/// How to fly a scenario; plain values, whatever front end chose them.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Options {
-    /// `None`: the scenario's own choice (the onboard PID stack, or the test pilot for the
-    /// survey).
-    pub controller: Option<Controller>,
-    pub tuning: Tuning,
-    /// The scan matcher's dynamic-object rejection (seed 000 sec. 4.2).
-    pub dynamic_rejection: bool,
-    /// Run length, s: the scenario's default when `None`.
-    pub duration_s: Option<f64>,
-}
-
-impl Options {
-    /// The scenario's own controller, default tuning, rejection on, default length.
-    pub fn new() -> Self {
-        Self {
-            dynamic_rejection: true,
-            ..Self::default()
-        }
-    }
-}
-
-/// Why a scenario cannot be flown as asked.
-#[derive(Clone, Debug, PartialEq)]
-pub enum ScenarioError {
-    /// `controller` cannot fly `scenario`; `instead` can (`None`: leave the choice to the
-    /// scenario).
-    Controller {
-        scenario: &'static str,
-        controller: Controller,
-        reason: &'static str,
-        instead: Option<Controller>,
-    },
-    /// The world does not allow the scenario.
-    World(WorldError),
-    /// The run cannot be set up (a lidar too large for the onboard stack, for one).
-    Setup(SetupError),
-}
-
-impl core::fmt::Display for ScenarioError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            ScenarioError::Controller {
-                scenario,
-                controller,
-                reason,
-                instead,
-            } => {
-                write!(
-                    f,
-                    "{scenario} with controller {}: {reason}",
-                    controller.name()
-                )?;
-                match instead {
-                    Some(c) => write!(f, "; use controller {}", c.name()),
-                    None => write!(f, "; leave the controller unset"),
-                }
-            }
-            ScenarioError::World(e) => write!(f, "{e}"),
-            ScenarioError::Setup(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl std::error::Error for ScenarioError {}
-
-/// A scenario set up and ready to fly.
-pub struct Flight {
-    pilot: Pilot,
-    judge: Judge,
-    /// How long the flight is planned to last, s (for progress).
-    pub planned_s: f64,
-}
-
-impl Flight {
-    /// The test pilot flying `plan`, scored on how closely it follows the plan.
-    pub fn test_pilot(plan: Plan, config: &SimConfig) -> Self {
-        let planned_s = plan.duration_s().min(config.max_duration_s);
-        Self {
-            pilot: Pilot::Test(plan),
-            judge: Judge::Tracking,
-            planned_s,
-        }
-    }
-
-    /// Onboard software that logs into `log`, scored on holding over the start; `push` is the
-    /// scenario's own push, whose effect is scored apart.
-    pub fn onboard(
-        pilot: Pilot,
-        log: Rc<RefCell<FlightLog>>,
-        push: Option<Push>,
-        config: &SimConfig,
-    ) -> Self {
-        Self {
-            pilot,
-            judge: Judge::Onboard { log, push },
-            planned_s: config.max_duration_s,
-        }
-    }
-}
-
-impl Entry {
-    /// Sets the scenario up on `config` (which it may change: duration, pushes, battery,
-    /// people) and checks the result: the world's survey path free for the vehicle, and
-    /// everything the runner needs ([`SimConfig::validate`]). A flight that is returned
-    /// starts; nothing is refused after this, so callers may create their output files.
-    pub fn prepare(
-        &self,
-        options: &Options,
-        config: &mut SimConfig,
-    ) -> Result<Flight, ScenarioError> {
-        if options.controller == Some(Controller::Mrac) {
-            return Err(ScenarioError::Controller {
-                scenario: self.name,
-                controller: Controller::Mrac,
-                reason: "mrac is not implemented yet (MRAC with PCH is planned)",
-                instead: Some(Controller::Pid),
-            });
-        }
-        let flight = (self.prepare)(options, config)?;
-        for p in &config.world.path {
-            config
-                .world
-                .check_free(*p, config.vehicle.radius_m, "survey waypoint")
-                .map_err(ScenarioError::World)?;
-        }
-        config.validate().map_err(ScenarioError::Setup)?;
-        Ok(flight)
-    }
-}
-
-/// What a flight did: the runner's figures, the score, and the onboard stack's own log when
-/// it flew.
-#[derive(Clone, Debug)]
-pub struct Report {
-    pub outcome: Outcome,
-    pub score: Score,
-    pub onboard: Option<FlightLog>,
-}
-
-/// Flies `flight` on `config` (as prepared for it), handing every sample to `recorder`, and
-/// scores it.
-pub fn fly(
-    config: &SimConfig,
-    flight: Flight,
-    recorder: &mut dyn Recorder,
-) -> Result<Report, SetupError> {
-    let mut scorer = score::Scorer::new(recorder);
-    let outcome = runner::run(config, flight.pilot, &mut scorer)?;
-    let (score, onboard) = scorer.score(flight.judge, config, &outcome);
-    Ok(Report {
-        outcome,
-        score,
-        onboard,
-    })
 }

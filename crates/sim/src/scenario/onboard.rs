@@ -2,9 +2,11 @@
 //! for the vehicle and the lidar (through [`OnboardLink`]), the PID tuning and matcher options,
 //! the run length and the pilot who arms it.
 
-use super::{Controller, Flight, Options, ScenarioError, Tuning};
+use super::flight::{Controller, Flight, Options, ScenarioError, Tuning};
 use crate::disturb::Push;
-use crate::onboard_link::{autopilot_for, OnboardLink, Script, LARGE_SCAN_BEAMS, XV11_BEAMS};
+use crate::runner::onboard_link::{
+    autopilot_for, OnboardLink, Script, LARGE_SCAN_BEAMS, XV11_BEAMS,
+};
 use crate::runner::{Pilot, SimConfig};
 use plumbline_core::control::cascade::CascadeConfig;
 use plumbline_core::matching::OdometryConfig;

@@ -10,7 +10,7 @@
 
 use crate::disturb::Push;
 use crate::math::Vec3;
-use crate::onboard_link::FlightLog;
+use crate::runner::onboard_link::FlightLog;
 use crate::runner::{Outcome, Recorder, SimConfig, StateSample, Status, TruthPose};
 use crate::sensors::lidar::LidarScan;
 use plumbline_core::msgs::{FlightMode, ImuSample, SonarSample};
@@ -93,9 +93,9 @@ pub struct Score {
 /// What only an onboard flight is scored on.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct OnboardScore {
-    /// Largest hold error from the scenario's push until [`RECOVERY_ALLOWANCE_S`] after it, m.
+    /// Largest hold error from the scenario's push until `RECOVERY_ALLOWANCE_S` (3 s) after it, m.
     pub push_max_error_m: Option<f64>,
-    /// From the end of the push until back within [`RECOVERED_M`], s.
+    /// From the end of the push until back within `RECOVERED_M` (5 cm), s.
     pub recovery_s: Option<f64>,
     /// It flew, did not crash, and ended disarmed on the ground.
     pub landed: bool,

@@ -2,8 +2,8 @@
 //! scored on how closely it follows the plan. Its sensor logs are the simulator's benchmark
 //! inputs.
 
-use super::{Controller, Entry, Flight, Options, ScenarioError};
-use crate::plan::{Plan, PlanLimits};
+use super::flight::{Controller, Entry, Flight, Options, ScenarioError};
+use crate::runner::plan::{Plan, PlanLimits};
 use crate::runner::SimConfig;
 use crate::world::WorldError;
 

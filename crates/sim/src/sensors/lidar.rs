@@ -5,9 +5,9 @@
 //! moving or turning drone produces the motion skew a real spinning lidar has.
 
 use crate::math::Vec3;
-use crate::nearby::Nearby;
 use crate::rng::Rng;
-use crate::scene::{Cylinder, Scene};
+use crate::world::nearby::Nearby;
+use crate::world::scene::{Cylinder, Scene};
 
 /// One device's geometry, timing and error model.
 #[derive(Clone, Debug, PartialEq)]

@@ -5,7 +5,7 @@
 
 use crate::math::Vec3;
 use crate::rng::Rng;
-use crate::scene::{Cylinder, Scene};
+use crate::world::scene::{Cylinder, Scene};
 use plumbline_core::msgs::SonarSample;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -52,7 +52,7 @@ impl Sonar {
     /// world frame. No echo within range reads as the maximum (the device's behaviour).
     ///
     /// The runner asks at every physics step (a reading is due at 20 Hz), so this is inlined
-    /// there: see [`crate::runner`] on calls in the step loop.
+    /// there: see the runner's `lockstep` module on calls in the step loop.
     #[inline]
     pub fn sample(
         &mut self,

@@ -1,5 +1,6 @@
-//! Vehicle parameters: mass properties, rotor layout, motors, drag, battery and power, with two
-//! documented presets and TOML loading.
+//! The vehicle: its parameters (this module: mass properties, rotor layout, motors, drag,
+//! battery and power, with two documented presets and TOML loading), its rigid-body
+//! [`dynamics`], the [`motors`], the [`battery`] and the electrical [`power`] it draws.
 //!
 //! Rotor numbering and spin follow seed 002 eqs. 15-19, rewritten from the seed's z-down body
 //! frame into Plumbline's FLU frame (DESIGN.md §3): in the square (X) configuration rotor 1 is
@@ -7,8 +8,13 @@
 //! above, 2 and 4 counter-clockwise. In the plus configuration rotor 1 is front, 2 right, 3 back,
 //! 4 left with the same spin pattern.
 
-use crate::battery::BatteryParams;
+pub mod battery;
+pub mod dynamics;
+pub mod motors;
+pub mod power;
+
 use crate::math::Vec3;
+use battery::BatteryParams;
 use serde::{Deserialize, Serialize};
 
 /// Standard gravity, m/s².

@@ -2,7 +2,35 @@
 //! gathered along a logged trajectory. Walls are the boundaries between occupied and free
 //! cells, merged into straight runs so a building becomes thousands of walls, not millions.
 
-use crate::world::{Segment, WorldError};
+use crate::world::{Segment, World, WorldError};
+
+/// Most cells a rasterised grid may have: 16 million (64 MB of hit counts), 400 m x 400 m at
+/// 0.1 m. Larger extents come from bad poses, not from buildings.
+pub const MAX_RASTER_CELLS: usize = 16_000_000;
+
+/// Why laser hits could not be rasterised.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RasterError {
+    NoPoints,
+    /// The points span `extent_m` (x, y), which needs `cells` cells (NaN for non-finite points).
+    TooLarge {
+        extent_m: [f64; 2],
+        cells: f64,
+    },
+}
+
+impl std::fmt::Display for RasterError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RasterError::NoPoints => f.write_str("no laser hits to rasterise"),
+            RasterError::TooLarge { extent_m, cells } => write!(
+                f,
+                "the laser hits span {:.0} m x {:.0} m ({cells:.3e} cells), more than the {MAX_RASTER_CELLS} a grid may have",
+                extent_m[0], extent_m[1]
+            ),
+        }
+    }
+}
 
 /// Occupied cells on a regular grid; row 0 is the lowest y.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,25 +59,40 @@ impl Occupancy {
             && self.occupied[j as usize * self.width + i as usize]
     }
 
-    /// Cells hit at least `min_hits` times by the points (m); a grid just covering them.
-    pub fn from_hits(points: &[[f64; 2]], resolution_m: f64, min_hits: u32) -> Option<Occupancy> {
+    /// Cells hit at least `min_hits` times by the points (m); a grid just covering them. An
+    /// error when there is nothing to rasterise or the grid would exceed [`MAX_RASTER_CELLS`]
+    /// (points far apart, or not finite, are a bad input, not a building).
+    pub fn from_hits(
+        points: &[[f64; 2]],
+        resolution_m: f64,
+        min_hits: u32,
+    ) -> Result<Occupancy, RasterError> {
         let (x0, y0, x1, y1) = points.iter().fold(
             (f64::MAX, f64::MAX, f64::MIN, f64::MIN),
             |(a, b, c, d), p| (a.min(p[0]), b.min(p[1]), c.max(p[0]), d.max(p[1])),
         );
-        if points.is_empty() || resolution_m.is_nan() || resolution_m <= 0.0 {
-            return None;
+        if points.is_empty() {
+            return Err(RasterError::NoPoints);
         }
         let origin = [x0 - resolution_m, y0 - resolution_m];
-        let width = ((x1 - origin[0]) / resolution_m).ceil() as usize + 2;
-        let height = ((y1 - origin[1]) / resolution_m).ceil() as usize + 2;
+        let cells_x = ((x1 - origin[0]) / resolution_m).ceil() + 2.0;
+        let cells_y = ((y1 - origin[1]) / resolution_m).ceil() + 2.0;
+        let finite = points.iter().all(|p| p[0].is_finite() && p[1].is_finite());
+        let cells = if finite { cells_x * cells_y } else { f64::NAN };
+        if !(resolution_m > 0.0 && cells <= MAX_RASTER_CELLS as f64) {
+            return Err(RasterError::TooLarge {
+                extent_m: [x1 - x0, y1 - y0],
+                cells,
+            });
+        }
+        let (width, height) = (cells_x as usize, cells_y as usize);
         let mut hits = vec![0u32; width * height];
         for p in points {
             let i = ((p[0] - origin[0]) / resolution_m) as usize;
             let j = ((p[1] - origin[1]) / resolution_m) as usize;
             hits[j * width + i] += 1;
         }
-        Some(Occupancy {
+        Ok(Occupancy {
             width,
             height,
             resolution_m,
@@ -189,6 +232,31 @@ impl Occupancy {
     }
 }
 
+/// Grids become worlds here, not in `world`, so that the world format does not depend on the
+/// grid (the grid's wall tracing uses the world's segments).
+impl World {
+    /// A world whose walls outline an occupancy grid's occupied cells.
+    pub fn from_occupancy(
+        name: &str,
+        grid: &Occupancy,
+        start: [f64; 3],
+        path: Vec<[f64; 2]>,
+        altitude_m: f64,
+        ceiling_m: f64,
+    ) -> World {
+        World {
+            name: name.into(),
+            ceiling_m,
+            start,
+            walls: grid.walls(),
+            blocks: Vec::new(),
+            path,
+            altitude_m,
+            walkers: Vec::new(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -245,6 +313,18 @@ mod tests {
     fn hits_below_the_threshold_are_ignored() {
         let pts = [[0.05, 0.05], [0.06, 0.04], [1.05, 0.05]];
         let occ = Occupancy::from_hits(&pts, 0.1, 2).unwrap();
+        for far in [1e7, 1e30, f64::NAN] {
+            let mut with = pts.to_vec();
+            with.push([far, 0.0]);
+            assert!(matches!(
+                Occupancy::from_hits(&with, 0.1, 2),
+                Err(RasterError::TooLarge { .. })
+            ));
+        }
+        assert_eq!(
+            Occupancy::from_hits(&[], 0.1, 2),
+            Err(RasterError::NoPoints)
+        );
         assert_eq!(occ.occupied.iter().filter(|&&o| o).count(), 1);
     }
 }

@@ -6,9 +6,9 @@
 //! vehicle's own allocation (the inverse of seed 002 eqs. 15-16 for its rotor layout) gives
 //! rotor speeds, and the steady state of the motor model (Ω = Ω_max x) gives commands.
 
-use crate::dynamics::BodyState;
 use crate::math::{Quat, Vec3};
-use crate::plan::Reference;
+use crate::runner::plan::Reference;
+use crate::vehicle::dynamics::BodyState;
 use crate::vehicle::{VehicleParams, GRAVITY};
 
 /// Position errors beyond this are not integrated, m.
@@ -181,7 +181,7 @@ impl TestPilot {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dynamics::{Dynamics, Forcing};
+    use crate::vehicle::dynamics::{Dynamics, Forcing};
     use crate::vehicle::Frame;
 
     #[test]

@@ -6,7 +6,7 @@
 //! while that bound stays above the floor (with a margin far beyond rounding) the search is
 //! skipped, and the run's outputs are the same as with a search at every check.
 
-use crate::scene::Scene;
+use crate::world::scene::Scene;
 
 /// Rounding allowance of the bound, m (the distances are computed to about 1e-15 m).
 const MARGIN_M: f64 = 1e-9;

@@ -7,7 +7,7 @@
 //! (seen from the centre); they are gathered again only when the sensor has left a small disc
 //! around that centre. A wall is listed in every sector a beam from anywhere in the disc could
 //! meet it in, so the result is exactly the grid's: the same walls are tested by the same
-//! [`hit_segment`]. Where the lists would be long (a rasterised building of thousands of short
+//! `hit_segment`. Where the lists would be long (a rasterised building of thousands of short
 //! walls, or a 30 m lidar among hundreds of walls), the grid is faster and is used instead.
 //!
 //! Directions are binned by a pseudo-angle (a monotone, division-only stand-in for `atan2`),
@@ -16,7 +16,7 @@
 //! of the grid walk, which is what keeps long-range (30 m) beams cheap.
 
 use crate::math::Vec3;
-use crate::scene::{hit_segment, wall_hit, Cylinder, Hit, Scene};
+use crate::world::scene::{hit_segment, wall_hit, Cylinder, Hit, Scene};
 use crate::world::Segment;
 use core::f64::consts::{PI, TAU};
 
@@ -30,7 +30,7 @@ const SECTORS: usize = 64;
 const MAX_WALLS: usize = 400;
 /// Above this many walls per sector on average the grid is used instead: a long beam then
 /// passes more listed walls before its hit than grid cells (200 walls within 30 m: 9 per
-/// sector, and the grid walk was about twice as fast).
+/// sector, and the grid walk is about twice as fast).
 const MAX_PER_SECTOR: usize = 4;
 /// Angular padding for the rounding of `atan2`, `sin` and `cos`, rad.
 const PAD_RAD: f64 = 1e-9;
@@ -301,8 +301,9 @@ mod tests {
         let got = near.cast(&scene, o, d, 30.0, &[]);
         assert!(near.use_grid);
         assert_eq!(got, scene.cast(o, d, 30.0, &[]));
-        // A hundred small rooms, 200 walls all within 30 m: too many per sector.
-        let mut text = String::from("start 2 2 0\n");
+        // A hundred small rooms, 200 walls all within 30 m: too many per sector (inside an
+        // outline, as a world must enclose its start).
+        let mut text = String::from("start 2 2 0\noutline -1 -1 41 -1 41 41 -1 41\n");
         for i in 0..10 {
             for j in 0..10 {
                 let (x, y) = (i as f64 * 4.0, j as f64 * 4.0);

@@ -12,8 +12,17 @@
 //! `AREA`. Layer i is the rectangle 0 ≤ x < `edge[i]`, f(`edge[i]`) ≤ y < f(`edge[i + 1]`); layer 0
 //! is the base strip plus the tail beyond `TAIL_START`, stretched to a rectangle of the same area.
 
-use crate::rng::Rng;
 use std::sync::OnceLock;
+
+/// The uniform draws the method consumes. A trait rather than the simulator's generator itself,
+/// so that the generator can offer normals through this module without the two depending on
+/// each other; calls are monomorphised, so they inline as before.
+pub trait UniformSource {
+    /// 64 random bits.
+    fn next_u64(&mut self) -> u64;
+    /// Uniform in [0, 1).
+    fn uniform(&mut self) -> f64;
+}
 
 const LAYERS: usize = 128;
 /// Where the tail starts for 128 layers (Marsaglia and Tsang's r).
@@ -54,7 +63,7 @@ fn tables() -> &'static Tables {
 /// One standard normal draw from `rng`. The common case (a point inside its layer's inner
 /// rectangle) is small enough to inline into every caller; the rest is out of line.
 #[inline]
-pub fn standard_normal(rng: &mut Rng) -> f64 {
+pub fn standard_normal<R: UniformSource>(rng: &mut R) -> f64 {
     let t = tables();
     let (layer, u) = layer_and_offset(rng);
     if u.abs() < t.inner[layer] {
@@ -65,7 +74,7 @@ pub fn standard_normal(rng: &mut Rng) -> f64 {
 
 /// The low 7 bits of one word pick the layer, the top 53 give a signed uniform in [-1, 1).
 #[inline]
-fn layer_and_offset(rng: &mut Rng) -> (usize, f64) {
+fn layer_and_offset<R: UniformSource>(rng: &mut R) -> (usize, f64) {
     let bits = rng.next_u64();
     let layer = (bits & (LAYERS as u64 - 1)) as usize;
     let u = (bits >> 11) as f64 * (1.0 / (1u64 << 52) as f64) - 1.0;
@@ -76,7 +85,7 @@ fn layer_and_offset(rng: &mut Rng) -> (usize, f64) {
 /// afresh after a rejection.
 #[cold]
 #[inline(never)]
-fn outside_inner(rng: &mut Rng, t: &Tables, mut layer: usize, mut u: f64) -> f64 {
+fn outside_inner<R: UniformSource>(rng: &mut R, t: &Tables, mut layer: usize, mut u: f64) -> f64 {
     loop {
         if layer == 0 {
             return tail(rng, u.signum());
@@ -94,7 +103,7 @@ fn outside_inner(rng: &mut Rng, t: &Tables, mut layer: usize, mut u: f64) -> f64
 }
 
 /// A draw from the normal tail beyond `TAIL_START` (Marsaglia 1964), with the given sign.
-fn tail(rng: &mut Rng, sign: f64) -> f64 {
+fn tail<R: UniformSource>(rng: &mut R, sign: f64) -> f64 {
     loop {
         // 1 - uniform lies in (0, 1], so the logarithms are finite.
         let a = -(1.0 - rng.uniform()).ln() / TAIL_START;
@@ -108,6 +117,7 @@ fn tail(rng: &mut Rng, sign: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rng::Rng;
 
     #[test]
     fn the_layers_close_at_the_top() {

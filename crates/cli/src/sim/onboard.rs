@@ -1,14 +1,14 @@
 //! The onboard stack's side of `plumbline sim`: the options of the scenarios it flies, what it
 //! did in the summary (modes, failsafe, motor jitter, the push's score), and its plots.
 
+use super::outputs::create;
+use super::plot::{stacked_panels, Line};
 use crate::plot::write_png;
 use crate::report::CliError;
-use crate::sim_plot::{stacked_panels, Line};
 use clap::Args;
 use plotters::prelude::*;
 use plumbline_core::msgs::{FailsafeReason, FlightMode};
-use plumbline_io::output::OutputFile;
-use plumbline_sim::onboard_link::FlightLog;
+use plumbline_sim::runner::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
 use plumbline_sim::scenario::score::OnboardScore;
 use plumbline_sim::scenario::{Controller, Options, Tuning};
@@ -109,7 +109,7 @@ pub fn extend_summary(
 
 /// `position_error.png` (seed 000 Fig. 9: Δx, Δy from the hold point, driven back to zero
 /// after the push) and `motors.png` (the four motor commands). Altitude, roll, pitch, battery
-/// and the top view are `sim_cmd`'s `flight.png` and `top.png`.
+/// and the top view are the command's `flight.png` and `top.png`.
 pub fn plots(
     dir: &Path,
     config: &SimConfig,
@@ -138,8 +138,9 @@ pub fn plots(
             ),
         ],
     )];
-    let png = |name: &str| Ok::<_, CliError>(OutputFile::stage(&dir.join(name))?);
-    write_png(png("position_error.png")?, |p| stacked_panels(p, error))?;
+    write_png(create(dir, "position_error.png")?, |p| {
+        stacked_panels(p, error)
+    })?;
     let colors = [RED, GREEN, BLUE, BLACK];
     let names = ["motor 1", "motor 2", "motor 3", "motor 4"];
     let motors: Vec<Line> = (0..4)
@@ -152,7 +153,7 @@ pub fn plots(
             (names[i], colors[i], pts)
         })
         .collect();
-    write_png(png("motors.png")?, |p| {
+    write_png(create(dir, "motors.png")?, |p| {
         stacked_panels(p, vec![("motor commands (0..1)", motors)])
     })
 }

@@ -2,12 +2,11 @@
 //! images (PGM plus a map_server YAML) and CARMEN logs with poses, rasterised.
 
 use crate::report::CliError;
-use plumbline_io::carmen::CarmenLog;
-use plumbline_io::output::OutputFile;
-use plumbline_sim::occupancy::Occupancy;
-use plumbline_sim::scene::Scene;
+use plumbline_io::carmen::{CarmenLog, OdomPose};
+use plumbline_io::output;
+use plumbline_sim::world::occupancy::Occupancy;
+use plumbline_sim::world::scene::Scene;
 use plumbline_sim::world::World;
-use std::io::Write;
 use std::path::Path;
 
 /// Resolution of worlds rasterised from logs, m per cell.
@@ -78,7 +77,11 @@ pub fn load_pgm(path: &Path) -> Result<World, CliError> {
 
 /// Rasterises a log's laser hits at its stored poses into a world; the survey path follows
 /// the logged trajectory. Returns the world and its occupancy grid (for a PGM copy).
-pub fn rasterize(log: &CarmenLog, name: &str) -> Result<(World, Occupancy), CliError> {
+pub fn rasterize(
+    log: &CarmenLog,
+    log_name: &str,
+    name: &str,
+) -> Result<(World, Occupancy), CliError> {
     let mut hits = Vec::new();
     let mut poses = Vec::new();
     for rec in &log.scans {
@@ -96,8 +99,15 @@ pub fn rasterize(log: &CarmenLog, name: &str) -> Result<(World, Occupancy), CliE
     let first = poses
         .first()
         .ok_or_else(|| CliError("the log has no scans with poses".into()))?;
-    let grid = Occupancy::from_hits(&hits, RASTER_RESOLUTION_M, RASTER_MIN_HITS)
-        .ok_or_else(|| CliError("the log has no valid laser hits".into()))?;
+    let grid = Occupancy::from_hits(&hits, RASTER_RESOLUTION_M, RASTER_MIN_HITS).map_err(|e| {
+        match farthest_pose(log) {
+            Some((line, p)) => CliError(format!(
+                "{log_name}:{line}: {e}; the pose farthest from the others is here ({}, {}): fix or remove it",
+                p.x_m, p.y_m
+            )),
+            None => CliError(format!("{log_name}: {e}")),
+        }
+    })?;
     let mut world = World::from_occupancy(
         name,
         &grid,
@@ -111,6 +121,27 @@ pub fn rasterize(log: &CarmenLog, name: &str) -> Result<(World, Occupancy), CliE
         world.start = [p[0], p[1], first.theta_rad];
     }
     Ok((world, grid))
+}
+
+/// The line and pose of the scan whose pose lies farthest from the median pose: where a log
+/// whose hits span an absurd extent went wrong (a corrupt or unit-mixed pose).
+fn farthest_pose(log: &CarmenLog) -> Option<(usize, OdomPose)> {
+    let poses: Vec<(usize, OdomPose)> = log
+        .scans
+        .iter()
+        .zip(&log.scan_lines)
+        .filter_map(|(rec, &line)| rec.odom.map(|p| (line, p)))
+        .collect();
+    let median = |f: fn(&OdomPose) -> f64| {
+        let mut v: Vec<f64> = poses.iter().map(|(_, p)| f(p)).collect();
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied()
+    };
+    let (mx, my) = (median(|p| p.x_m)?, median(|p| p.y_m)?);
+    poses.into_iter().max_by(|a, b| {
+        let d = |p: &OdomPose| (p.x_m - mx).hypot(p.y_m - my);
+        d(&a.1).total_cmp(&d(&b.1))
+    })
 }
 
 /// The logged trajectory straightened into waypoints a drone can fly: a wheeled robot brushes
@@ -153,11 +184,9 @@ fn drone_path(scene: &Scene, poses: &[plumbline_io::carmen::OdomPose]) -> Vec<[f
 
 /// Writes `NAME.world`, `NAME.pgm` and `NAME.yaml` into `dir`.
 pub fn write_world(dir: &Path, world: &World, grid: &Occupancy) -> Result<(), CliError> {
-    std::fs::create_dir_all(dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
     let write = |ext: &str, bytes: &[u8]| {
-        let mut out = OutputFile::stage(&dir.join(format!("{}.{ext}", world.name)))?;
-        out.write_all(bytes).map_err(|e| out.error(e))?;
-        Ok::<_, CliError>(out.commit()?)
+        let path = dir.join(format!("{}.{ext}", world.name));
+        output::write(&path, bytes).map_err(CliError::from)
     };
     write("world", world.to_text().as_bytes())?;
     write("pgm", &grid.to_pgm())?;

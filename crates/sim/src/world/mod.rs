@@ -1,9 +1,21 @@
-//! Indoor worlds: wall segments extruded from the floor (z = 0) to the ceiling, a take-off point,
-//! a survey path and walking people. Parsed from the small line format documented in
-//! `crates/sim/WORLDS.md`; the shipped worlds live in `crates/sim/worlds/`.
+//! The world and its geometry: what the vehicle flies in and what its sensors see.
+//!
+//! - this module: indoor worlds, wall segments extruded from the floor (z = 0) to the ceiling,
+//!   a take-off point, a survey path and walking people, parsed from the small line format
+//!   documented in `crates/sim/WORLDS.md` (the shipped worlds live in `crates/sim/worlds/`);
+//! - [`occupancy`]: occupancy grids (a map image) and worlds traced from them;
+//! - [`scene`]: the world as ray-casting geometry for the lidar and the sonar;
+//! - [`nearby`]: the walls near a point, gathered once for many rays;
+//! - [`clearance`]: the distance from the vehicle to the nearest wall, for crash checks.
+
+pub mod check;
+pub mod clearance;
+pub mod nearby;
+pub mod occupancy;
+pub mod scene;
 
 use crate::math::Vec3;
-use crate::occupancy::Occupancy;
+use check::{check_enclosed, unknown_keyword, world_number, OnceOnly, KEYWORDS};
 
 /// A wall from `a` to `b` (world x, y in metres), floor to ceiling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -98,10 +110,10 @@ impl std::error::Error for WorldError {}
 
 /// The shipped worlds, by name.
 pub const SHIPPED: &[(&str, &str)] = &[
-    ("room", include_str!("../worlds/room.world")),
-    ("office", include_str!("../worlds/office.world")),
-    ("building", include_str!("../worlds/building.world")),
-    ("intel", include_str!("../worlds/intel.world")),
+    ("room", include_str!("../../worlds/room.world")),
+    ("office", include_str!("../../worlds/office.world")),
+    ("building", include_str!("../../worlds/building.world")),
+    ("intel", include_str!("../../worlds/intel.world")),
 ];
 
 fn closed_loop(points: &[[f64; 2]]) -> impl Iterator<Item = Segment> + '_ {
@@ -110,25 +122,6 @@ fn closed_loop(points: &[[f64; 2]]) -> impl Iterator<Item = Segment> + '_ {
 
 fn points(nums: &[f64]) -> Vec<[f64; 2]> {
     nums.chunks_exact(2).map(|c| [c[0], c[1]]).collect()
-}
-
-/// Every statement of the world format (`WORLDS.md`).
-const KEYWORDS: &[&str] = &[
-    "name", "ceiling", "altitude", "start", "wall", "outline", "block", "box", "path", "person",
-];
-
-/// Names the unknown word, the closest keyword when one is a likely typo, and all of them.
-fn unknown_keyword(word: &str) -> String {
-    let closest = KEYWORDS
-        .iter()
-        .map(|k| (strsim::damerau_levenshtein(word, k), *k))
-        .min()
-        .filter(|(d, k)| *d <= 2 && *d < k.len());
-    let hint = closest.map_or(String::new(), |(_, k)| format!("; did you mean `{k}`?"));
-    format!(
-        "unknown keyword `{word}`{hint} (a line starts with one of: {})",
-        KEYWORDS.join(", ")
-    )
 }
 
 impl World {
@@ -152,7 +145,9 @@ impl World {
             altitude_m: 1.0,
             walkers: Vec::new(),
         };
-        let mut have_start = false;
+        let mut start_line = None;
+        let mut path_lines = Vec::new();
+        let mut once = OnceOnly::default();
         // Editors on some systems put a byte-order mark in front of UTF-8 text; it is not a word.
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (i, raw) in text.lines().enumerate() {
@@ -161,6 +156,7 @@ impl World {
             let content = raw.split('#').next().unwrap_or("").trim();
             let mut words = content.split_whitespace();
             let Some(key) = words.next() else { continue };
+            once.note(key, line).map_err(err)?;
             if key == "name" {
                 w.name = words.collect::<Vec<_>>().join(" ");
                 continue;
@@ -169,12 +165,7 @@ impl World {
                 return Err(err(unknown_keyword(key)));
             }
             let nums = words
-                .map(|s| {
-                    s.parse::<f64>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .ok_or_else(|| err(format!("`{s}` is not a finite number")))
-                })
+                .map(|s| world_number(s).map_err(err))
                 .collect::<Result<Vec<f64>, _>>()?;
             let want = |n: usize| {
                 if nums.len() == n {
@@ -211,7 +202,7 @@ impl World {
                 "start" => {
                     want(3)?;
                     w.start = [nums[0], nums[1], nums[2]];
-                    have_start = true;
+                    start_line = Some(line);
                 }
                 "wall" => {
                     want(4)?;
@@ -242,6 +233,7 @@ impl World {
                 "path" => {
                     want_points(1)?;
                     w.path.extend(points(&nums));
+                    path_lines.resize(w.path.len(), line);
                 }
                 "person" => {
                     want(5)?;
@@ -264,34 +256,14 @@ impl World {
         if w.walls.is_empty() {
             return Err(whole("world has no walls"));
         }
-        if !have_start {
+        let Some(start_line) = start_line else {
             return Err(whole("world has no `start` line"));
-        }
+        };
+        check_enclosed(&w, start_line, &path_lines)?;
         if w.altitude_m <= 0.0 || w.altitude_m >= w.ceiling_m {
             return Err(whole("altitude must lie between floor and ceiling"));
         }
         Ok(w)
-    }
-
-    /// A world whose walls outline an occupancy grid's occupied cells.
-    pub fn from_occupancy(
-        name: &str,
-        grid: &Occupancy,
-        start: [f64; 3],
-        path: Vec<[f64; 2]>,
-        altitude_m: f64,
-        ceiling_m: f64,
-    ) -> World {
-        World {
-            name: name.into(),
-            ceiling_m,
-            start,
-            walls: grid.walls(),
-            blocks: Vec::new(),
-            path,
-            altitude_m,
-            walkers: Vec::new(),
-        }
     }
 
     /// The world in the line format of `WORLDS.md` (walls as `wall` lines; blocks become plain

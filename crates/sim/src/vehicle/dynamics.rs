@@ -1,5 +1,5 @@
 //! Rigid-body quadrotor dynamics (seed 002 eqs. 13-19) with the seed's second-order motor model:
-//! the body by fixed-step fourth-order Runge-Kutta, the motors in closed form ([`crate::motors`]).
+//! the body by fixed-step fourth-order Runge-Kutta, the motors in closed form ([`crate::vehicle::motors`]).
 //!
 //! Differences from the seed's text, and why:
 //! - Frames are FLU body / ENU-like world (DESIGN.md §3), so thrust is +z body and rotor numbering
@@ -17,7 +17,7 @@
 //!   evaluated three times a step instead of four, and the body carries 13 states, not 21.
 
 use crate::math::{Quat, Vec3};
-use crate::motors::{MotorModel, Rotors};
+use crate::vehicle::motors::{MotorModel, Rotors};
 use crate::vehicle::{VehicleParams, GRAVITY};
 use core::cell::Cell;
 
@@ -234,7 +234,7 @@ impl Dynamics {
     /// One step: the motors in closed form, the body by classical RK4. The quaternion is
     /// renormalised afterwards by [`Quat::renormalized`] (one step drifts it by far less than
     /// 1e-8). Commands are clamped to 0..1 here, once. Inlined with its helpers into the
-    /// runner's loop (see [`crate::runner`]), apart from the final combination (`Rigid::combine`).
+    /// runner's loop (see the runner's `lockstep` module), apart from the final combination (`Rigid::combine`).
     #[inline(always)]
     pub fn step(&self, s: &BodyState, f: &Forcing) -> BodyState {
         let f = &Forcing {

@@ -1,29 +1,29 @@
 //! `plumbline sim`: closed-loop flight in the simulator, writing the emulated sensor logs and the
-//! ground truth in the benchmark formats (DESIGN.md §4, §5).
+//! ground truth in the benchmark formats (DESIGN.md §4, §5). The scenarios and their scoring are
+//! `plumbline-sim`'s; this command parses, writes files, plots and prints.
+
+mod onboard;
+mod outputs;
+mod plot;
+mod world;
 
 use crate::log_args::LogArgs;
+use crate::numeric::{within, Range};
 use crate::plot::write_png;
 use crate::report::{print_summary, progress, CliError, CliResult};
-use crate::sim_closed_loop;
-use crate::sim_plot;
-use crate::sim_world;
 use clap::builder::{PossibleValue, PossibleValuesParser};
 use clap::Args;
-use indicatif::ProgressBar;
-use plumbline_core::msgs::{ImuSample, SonarSample};
-use plumbline_io::carmen::{write_robotlaser1, LaserRecord};
+use outputs::{create, Collector, SensorLogs};
 use plumbline_io::input::read_text;
-use plumbline_io::output::{check_distinct, OutputFile};
+use plumbline_io::output::{self, check_distinct};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
-use plumbline_sim::runner::{Recorder, SetupError, SimConfig, StateSample, Status, TruthPose};
+use plumbline_sim::runner::{SetupError, SimConfig, Status, PHYSICS_HZ_RANGE};
 use plumbline_sim::scenario::{self, Report, ScenarioError};
-use plumbline_sim::sensors::lidar::{LidarProfile, LidarScan};
-use plumbline_sim::truth::relations;
+use plumbline_sim::sensors::lidar::LidarProfile;
 use plumbline_sim::vehicle::VehicleParams;
 use plumbline_sim::world::World;
 use serde_json::json;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -37,20 +37,21 @@ pub struct SimArgs {
     #[arg(long, default_value = "survey", value_parser = scenario_names())]
     pub scenario: String,
     #[command(flatten)]
-    pub closed_loop: sim_closed_loop::ClosedLoopArgs,
+    pub closed_loop: onboard::ClosedLoopArgs,
     #[arg(long, default_value = "xv11", value_parser = ["xv11", "urg04lx", "utm30lx"])]
     pub lidar: String,
     /// Vehicle preset (f450, pelican) or a TOML file (`base = "..."` plus overrides).
     #[arg(long, default_value = "f450")]
     pub vehicle: String,
     /// Run length of the closed-loop scenarios (default 60) and of the test pilot's `hold`;
-    /// an upper bound on the flight for `survey`, s.
-    #[arg(long)]
+    /// an upper bound on the flight for `survey`, s. Valid range: (0, 86400].
+    #[arg(long, value_parser = within::<f64>(Range::above(0.0, 86400.0)))]
     pub duration: Option<f64>,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Physics rate, Hz (fixed-step RK4).
-    #[arg(long, default_value_t = 1000.0)]
+    /// Physics rate, Hz (fixed-step RK4). Valid range: [100, 20000].
+    #[arg(long, default_value_t = 1000.0, value_parser = within::<f64>(
+        Range::closed(*PHYSICS_HZ_RANGE.start(), *PHYSICS_HZ_RANGE.end())))]
     pub physics_hz: f64,
     /// Turn off turbulence.
     #[arg(long)]
@@ -91,7 +92,7 @@ fn parse_push(s: &str) -> Result<Push, String> {
         .collect::<Result<_, _>>()?;
     match v[..] {
         [start_s, duration_s, fx, fy, fz]
-            if v.iter().all(|x| x.is_finite()) && duration_s >= 0.0 =>
+            if v.iter().all(|x| x.is_finite()) && start_s >= 0.0 && duration_s >= 0.0 =>
         {
             Ok(Push {
                 start_s,
@@ -99,7 +100,10 @@ fn parse_push(s: &str) -> Result<Push, String> {
                 force_n: Vec3::new(fx, fy, fz),
             })
         }
-        _ => Err("expected START,DURATION,FX,FY,FZ (five finite numbers, duration >= 0)".into()),
+        _ => Err(
+            "expected START,DURATION,FX,FY,FZ (five finite numbers, start and duration >= 0)"
+                .into(),
+        ),
     }
 }
 
@@ -108,7 +112,7 @@ fn load_world(arg: &str) -> Result<World, CliError> {
         return w.map_err(|e| CliError(format!("shipped world {arg}: {e}")));
     }
     if arg.ends_with(".pgm") {
-        return sim_world::load_pgm(Path::new(arg));
+        return world::load_pgm(Path::new(arg));
     }
     let text = read_text(Path::new(arg)).map_err(|e| {
         CliError(format!(
@@ -125,110 +129,6 @@ fn load_vehicle(arg: &str) -> Result<VehicleParams, CliError> {
     let text =
         read_text(Path::new(arg)).map_err(|e| CliError(format!("{e} (presets: f450, pelican)")))?;
     VehicleParams::from_toml(&text).map_err(|e| CliError(format!("{arg}: {e}")))
-}
-
-/// Streams the outputs into DIR as they are produced.
-struct Files {
-    clf: OutputFile,
-    imu: OutputFile,
-    sonar: OutputFile,
-    truth: OutputFile,
-    poses: Vec<TruthPose>,
-}
-
-/// Keeps the plotted series and the first write error; drives the progress bar.
-struct Collector {
-    files: Option<Files>,
-    states: Vec<StateSample>,
-    bar: ProgressBar,
-    error: Option<std::io::Error>,
-}
-
-impl Collector {
-    fn keep(&mut self, r: std::io::Result<()>) {
-        if let Err(e) = r {
-            self.error.get_or_insert(e);
-        }
-    }
-}
-
-fn stamp(t_s: f64) -> String {
-    format!("{t_s:.6}")
-}
-
-impl Recorder for Collector {
-    fn scan(&mut self, scan: &LidarScan, truth: &TruthPose) {
-        let Some(f) = self.files.as_mut() else { return };
-        let mut rec = LaserRecord::new(
-            scan.stamp_s,
-            scan.start_angle_rad as f32,
-            scan.increment_rad as f32,
-            scan.max_range_m as f32,
-            scan.ranges_m.clone(),
-        );
-        rec.valid.clone_from(&scan.valid);
-        rec.timestamp_text = stamp(scan.stamp_s);
-        let r = write_robotlaser1(&mut f.clf, &rec, "plumbline-sim").and_then(|_| {
-            let p = truth.position;
-            // `+ 0.0` turns an exact -0.0 heading into 0.0 so the file does not print "-0.000000".
-            writeln!(
-                f.truth,
-                "{} {:.6} {:.6} {:.6}",
-                rec.timestamp_text,
-                p.x,
-                p.y,
-                truth.attitude.yaw() + 0.0
-            )
-        });
-        f.poses.push(*truth);
-        self.keep(r);
-    }
-
-    fn imu(&mut self, s: &ImuSample) {
-        let Some(f) = self.files.as_mut() else { return };
-        let (g, a) = (s.gyro_rad_s, s.accel_m_s2);
-        let r = writeln!(
-            f.imu,
-            "{:.6},{},{},{},{},{},{}",
-            s.t_s, g[0], g[1], g[2], a[0], a[1], a[2]
-        );
-        self.keep(r);
-    }
-
-    fn sonar(&mut self, s: &SonarSample) {
-        let Some(f) = self.files.as_mut() else { return };
-        let r = writeln!(f.sonar, "{:.6},{}", s.t_s, s.range_m);
-        self.keep(r);
-    }
-
-    fn state(&mut self, s: &StateSample) {
-        self.states.push(*s);
-        self.bar.set_position(s.t_s as u64);
-    }
-}
-
-/// Outputs are staged and put in place when the flight is done: a run that fails or is stopped
-/// leaves the files of an earlier run as they were.
-fn create(dir: &Path, name: &str) -> Result<OutputFile, CliError> {
-    Ok(OutputFile::stage(&dir.join(name))?)
-}
-
-fn open_files(dir: &Path) -> Result<Files, CliError> {
-    std::fs::create_dir_all(dir).map_err(|e| CliError(format!("{}: {e}", dir.display())))?;
-    let mut imu = create(dir, "imu.csv")?;
-    let mut sonar = create(dir, "sonar.csv")?;
-    writeln!(
-        imu,
-        "t_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2"
-    )?;
-    writeln!(sonar, "t_s,range_m")?;
-    Ok(Files {
-        clf: create(dir, "scans.clf")?,
-        imu,
-        sonar,
-        truth: create(dir, "truth.txt")?,
-        poses: Vec::new(),
-    })
 }
 
 /// Every file a flight may write into `--out DIR`.
@@ -255,29 +155,6 @@ fn check_inputs_outside(args: &SimArgs, dir: &Path) -> CliResult {
     let paths: Vec<PathBuf> = OUTPUT_NAMES.iter().map(|n| dir.join(n)).collect();
     let outputs: Vec<(&str, &Path)> = paths.iter().map(|p| ("--out", p.as_path())).collect();
     Ok(check_distinct(&inputs, &outputs)?)
-}
-
-fn finish_files(dir: &Path, f: Files) -> Result<(), CliError> {
-    let mut rel = create(dir, "truth.relations")?;
-    for r in relations(&f.poses, 10.0) {
-        let t = r.translation;
-        writeln!(
-            rel,
-            "{} {} {:.6} {:.6} {:.6} {:.6} {:.6} {:.6}",
-            stamp(r.t1_s),
-            stamp(r.t2_s),
-            t.x,
-            t.y,
-            t.z,
-            r.roll,
-            r.pitch,
-            r.yaw
-        )?;
-    }
-    for w in [f.clf, f.imu, f.sonar, f.truth, rel] {
-        w.commit()?;
-    }
-    Ok(())
 }
 
 fn summary(args: &SimArgs, config: &SimConfig, report: &Report, wall_s: f64) -> serde_json::Value {
@@ -337,8 +214,8 @@ fn rasterize(args: &SimArgs, log_path: &Path) -> CliResult {
     let outputs = paths.each_ref().map(|p| ("--out", p.as_path()));
     check_distinct(&[("--rasterize", log_path)], &outputs)?;
     let log = args.log_args.read(log_path)?;
-    let (world, grid) = sim_world::rasterize(&log, &name)?;
-    sim_world::write_world(dir, &world, &grid)?;
+    let (world, grid) = world::rasterize(&log, &log_path.display().to_string(), &name)?;
+    world::write_world(dir, &world, &grid)?;
     let [x0, y0, x1, y1] = world.bounds();
     let summary = json!({
         "world": world.name,
@@ -405,10 +282,11 @@ pub fn run(args: SimArgs) -> CliResult {
     if let Some(dir) = args.out.as_deref() {
         check_inputs_outside(&args, dir)?;
     }
-    let files = args.out.as_deref().map(open_files).transpose()?;
+    // Every check has passed: from here on the run starts, so the files may be staged.
+    let logs = args.out.as_deref().map(SensorLogs::create).transpose()?;
     let bar = progress(flight.planned_s.ceil() as u64, "sim");
     let mut collector = Collector {
-        files,
+        logs,
         states: Vec::new(),
         bar,
         error: None,
@@ -423,25 +301,20 @@ pub fn run(args: SimArgs) -> CliResult {
     }
     let mut summary = summary(&args, &config, &report, wall_s);
     if let (Some(log), Some(score)) = (&report.onboard, &report.score.onboard) {
-        sim_closed_loop::extend_summary(&mut summary, &args.closed_loop, &config, log, score);
+        onboard::extend_summary(&mut summary, &args.closed_loop, &config, log, score);
         if let Some(dir) = args.out.as_deref() {
-            sim_closed_loop::plots(dir, &config, log, &collector.states)?;
+            onboard::plots(dir, &config, log, &collector.states)?;
         }
     }
-    if let (Some(dir), Some(files)) = (args.out.as_deref(), collector.files.take()) {
-        let poses = files.poses.clone();
-        finish_files(dir, files)?;
+    if let (Some(dir), Some(logs)) = (args.out.as_deref(), collector.logs.take()) {
+        let poses = logs.finish(dir)?;
         let states = &collector.states;
         write_png(create(dir, "top.png")?, |p| {
-            sim_plot::top_view(p, &config.world, states, &poses)
+            plot::top_view(p, &config.world, states, &poses)
         })?;
-        write_png(create(dir, "flight.png")?, |p| {
-            sim_plot::time_series(p, states)
-        })?;
+        write_png(create(dir, "flight.png")?, |p| plot::time_series(p, states))?;
         let text = serde_json::to_string_pretty(&summary).map_err(|e| CliError(e.to_string()))?;
-        let mut out = create(dir, "summary.json")?;
-        writeln!(out, "{text}").map_err(|e| out.error(e))?;
-        out.commit()?;
+        output::write(&dir.join("summary.json"), (text + "\n").as_bytes())?;
     }
     print_summary(&summary, args.json);
     Ok(())

@@ -1,10 +1,12 @@
-//! A small seeded generator (xoshiro256++, seeded through splitmix64) with Gaussian draws
-//! (ziggurat, see [`crate::ziggurat`]).
+//! Randomness for the simulator: a small seeded generator (xoshiro256++, seeded through splitmix64) with Gaussian draws
+//! (the [`ziggurat`] method).
 //!
 //! The simulator's promise is bit-for-bit reproducibility from one `u64` seed on every platform.
 //! Owning the 40 lines of generator means no upstream release can change a stream under us, and
 //! each random process gets its own stream via [`Rng::fork`], so adding a sensor does not shift
 //! the noise of the others.
+
+pub mod ziggurat;
 
 /// xoshiro256++ (Blackman and Vigna), period 2^256 - 1.
 #[derive(Clone, Debug)]
@@ -61,7 +63,18 @@ impl Rng {
     /// Standard normal.
     #[inline]
     pub fn gauss(&mut self) -> f64 {
-        crate::ziggurat::standard_normal(self)
+        ziggurat::standard_normal(self)
+    }
+}
+
+impl ziggurat::UniformSource for Rng {
+    #[inline]
+    fn next_u64(&mut self) -> u64 {
+        Rng::next_u64(self)
+    }
+    #[inline]
+    fn uniform(&mut self) -> f64 {
+        Rng::uniform(self)
     }
 }
 
