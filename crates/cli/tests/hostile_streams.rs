@@ -99,7 +99,9 @@ fn a_bad_line_late_in_a_log_keeps_the_poses_before_it_and_says_where_they_are() 
     let err = stderr(&out);
     let lines = text.lines().count();
     assert!(
-        err.contains(&format!("bad.clf:{lines}: line ends before")),
+        err.contains(&format!(
+            "bad.clf:{lines}: FLASER: 3 readings make 12 fields"
+        )),
         "{err}"
     );
     assert!(

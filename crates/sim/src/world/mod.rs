@@ -434,7 +434,7 @@ mod tests {
                 .contains("unknown keyword `nmae`; did you mean `name`?"),
             "{e}"
         );
-        assert!(World::parse("\u{feff}start 0 0 0\nwall 0 0 1 0\n").is_ok());
+        assert!(World::parse("\u{feff}start 1 1 0\noutline 0 0 4 0 4 4 0 4\n").is_ok());
         let e = World::parse("start 0 0 0\nwindow 1 2\n").unwrap_err();
         assert!(e.reason.contains("unknown keyword `window`"), "{e}");
         assert!(World::parse("start 0 0 0\n")
