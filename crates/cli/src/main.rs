@@ -10,6 +10,7 @@ mod odometry_cmd;
 mod plot;
 mod report;
 mod sim;
+mod slam_cmd;
 
 #[derive(Parser)]
 #[command(
@@ -26,6 +27,8 @@ struct Cli {
 enum Command {
     /// Scan-to-scan lidar odometry over a CARMEN log.
     Odometry(odometry_cmd::OdometryArgs),
+    /// Lidar SLAM over a CARMEN log: trajectory, pose graph and map.
+    Slam(slam_cmd::SlamArgs),
     /// Score a trajectory against a relations file (Kuemmerle et al. 2009).
     Eval(eval_cmd::EvalArgs),
     /// Lidar devices: decode raw captures, record from a serial port, plot a revolution.
@@ -38,6 +41,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: report::CliResult = match cli.command {
         Command::Odometry(args) => odometry_cmd::run(args),
+        Command::Slam(args) => slam_cmd::run(args),
         Command::Eval(args) => eval_cmd::run(args),
         Command::Lidar(args) => lidar_cmd::run(args),
         Command::Sim(args) => sim::run(args),

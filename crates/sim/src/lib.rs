@@ -21,6 +21,7 @@
 #![forbid(unsafe_code)]
 
 pub mod disturb;
+pub mod map_error;
 pub mod math;
 pub mod rng;
 pub mod runner;

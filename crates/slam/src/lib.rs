@@ -3,3 +3,20 @@
 //! submaps and checked before they enter a pose graph, and an occupancy grid of the whole area
 //! for people and planners. It runs scan by scan online and the same way over a recorded log.
 #![forbid(unsafe_code)]
+
+pub mod backend;
+pub mod config;
+pub mod correlative;
+pub mod graph;
+pub mod grid;
+pub mod guard;
+pub mod keyframe;
+pub mod loops;
+pub mod map_files;
+pub mod slam;
+pub mod tracker;
+pub mod worker;
+
+pub use config::{EdgeNoise, GuardConfig, LoopConfig, SlamConfig};
+pub use slam::{Finished, ScanPose, Slam, TrackingStats};
+pub use tracker::{local_map_cells, ConfigError};

@@ -107,7 +107,7 @@ fn parse_push(s: &str) -> Result<Push, String> {
     }
 }
 
-fn load_world(arg: &str) -> Result<World, CliError> {
+pub fn load_world(arg: &str) -> Result<World, CliError> {
     if let Some(w) = World::shipped(arg) {
         return w.map_err(|e| CliError(format!("shipped world {arg}: {e}")));
     }

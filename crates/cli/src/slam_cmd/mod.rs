@@ -1,0 +1,180 @@
+//! `plumbline slam LOG`: lidar SLAM over a log (DESIGN.md §4): a pose for every scan, the map
+//! as map_server files and a picture, the pose graph as g2o text, and, for a simulated log
+//! given its world, how far the map's walls lie from the true ones.
+
+mod outputs;
+mod truth;
+
+use crate::log_args::LogArgs;
+use crate::odometry_cmd::{percentile, MAX_BEAMS};
+use crate::report::{print_summary, progress, CliError, CliResult};
+use clap::Args;
+use plumbline_core::scan::Scan;
+use plumbline_io::carmen::OdomPose;
+use plumbline_io::output::check_distinct;
+use plumbline_slam::map_files::check_writable;
+use plumbline_slam::{local_map_cells, Slam, SlamConfig};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Args, Debug)]
+pub struct SlamArgs {
+    /// CARMEN log (FLASER or ROBOTLASER1 lines; .gz is fine).
+    pub log: PathBuf,
+    /// Use the log's odometry as the motion guess (default: lidar only).
+    #[arg(long)]
+    pub odom_prior: bool,
+    /// Write the trajectory (`timestamp x y theta`, one line per scan) here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write the map as PREFIX.pgm + PREFIX.yaml (ROS map_server), PREFIX.png (a picture with
+    /// the path) and the pose graph as PREFIX.g2o.
+    #[arg(long, value_name = "PREFIX")]
+    pub map: Option<PathBuf>,
+    /// Draw the points of evenly spaced scans at their final poses, with the path, into this
+    /// PNG (a `.png` file).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// The simulated world the log was flown in (a shipped name or a world file): score the
+    /// map against its walls (`map_error_m`). Needs --truth.
+    #[arg(long, requires = "truth")]
+    pub world: Option<String>,
+    /// The simulator's truth.txt for the log: where the map frame (the first scan's pose) lies
+    /// in the world.
+    #[arg(long, requires = "world")]
+    pub truth: Option<PathBuf>,
+    #[command(flatten)]
+    pub log_args: LogArgs,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: SlamArgs) -> CliResult {
+    let wall = Instant::now();
+    // Every output is checked before the work starts: a typo in a prefix should not cost the
+    // whole log.
+    let map_paths = args.map.as_deref().map(check_writable).transpose()?;
+    let g2o = args.map.as_deref().map(outputs::g2o_path);
+    let mut outputs: Vec<(&str, &Path)> = [("--out", &args.out), ("--plot", &args.plot)]
+        .into_iter()
+        .filter_map(|(role, p)| p.as_deref().map(|p| (role, p)))
+        .collect();
+    if let (Some(m), Some(g)) = (&map_paths, &g2o) {
+        outputs.extend([&m.pgm, &m.yaml, &m.png, g].map(|p| ("--map", p.as_path())));
+    }
+    let world_file = args.world.as_deref().map(Path::new).filter(|p| p.is_file());
+    let inputs: Vec<(&str, &Path)> = [
+        ("LOG", Some(args.log.as_path())),
+        ("--truth", args.truth.as_deref()),
+        ("--world", world_file),
+    ]
+    .into_iter()
+    .filter_map(|(role, p)| p.map(|p| (role, p)))
+    .collect();
+    check_distinct(&inputs, &outputs)?;
+    let staged = outputs::Staged::new(
+        args.out.as_deref(),
+        args.plot.as_deref(),
+        args.map.as_deref(),
+    )?;
+    let truth = args
+        .world
+        .as_deref()
+        .zip(args.truth.as_deref())
+        .map(|(w, t)| truth::Truth::load(w, t))
+        .transpose()?;
+    let log = args.log_args.read(&args.log)?;
+    let config = SlamConfig::default();
+    let mut cells = local_map_cells(&config);
+    let mut slam: Slam<MAX_BEAMS> =
+        Slam::new(config, &mut cells, true).map_err(|e| CliError(e.0))?;
+    let bar = progress(log.scans.len() as u64, "slam");
+    let mut anchors: Vec<outputs::Anchor> = Vec::with_capacity(log.scans.len());
+    let mut times_us = Vec::with_capacity(log.scans.len());
+    let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
+    let mut previous_odom: Option<OdomPose> = None;
+    let mut lost_s = 0.0;
+    let mut previous_stamp: Option<f64> = None;
+    for (i, rec) in log.scans.iter().enumerate() {
+        *scan = rec.to_scan().map_err(|_| {
+            CliError(format!(
+                "{}: scan {} has {} beams; at most {MAX_BEAMS} are supported",
+                args.log.display(),
+                i + 1,
+                rec.beam_count()
+            ))
+        })?;
+        let prior = match (args.odom_prior, previous_odom, rec.odom) {
+            (true, Some(a), Some(b)) => Some(a.between(b).to_f32()),
+            _ => None,
+        };
+        previous_odom = rec.odom;
+        let start = Instant::now();
+        let out = slam.add_scan(&scan, prior);
+        times_us.push(start.elapsed().as_secs_f64() * 1e6);
+        anchors.push(outputs::Anchor {
+            keyframe: out.keyframe,
+            relative: out.relative,
+            lost: out.predicted,
+        });
+        // The time since the last scan counts as lost when this scan could not be matched.
+        if out.predicted {
+            lost_s += previous_stamp.map_or(0.0, |p| (rec.timestamp_s - p).abs());
+        }
+        previous_stamp = Some(rec.timestamp_s);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let tracking = slam.tracking_stats();
+    let finished = slam
+        .finish()
+        .ok_or_else(|| CliError("the SLAM back end stopped unexpectedly".into()))?;
+    let backend = &finished.backend;
+    let trajectory = outputs::trajectory(&log.scans, &anchors, backend.poses());
+    let written = staged.write(args.map.as_deref(), &log.scans, &trajectory, backend)?;
+    let map_error = match (&truth, &written.grid) {
+        (Some(truth), Some(grid)) => truth.map_error(grid, &log.scans[0])?,
+        (Some(truth), None) => truth.map_error(&outputs::grid(backend)?, &log.scans[0])?,
+        _ => None,
+    };
+    times_us.sort_by(f64::total_cmp);
+    let stats = backend.stats();
+    let duration = log.scans.last().map_or(0.0, |l| l.timestamp_s)
+        - log.scans.first().map_or(0.0, |f| f.timestamp_s);
+    let wall_s = wall.elapsed().as_secs_f64();
+    let summary = json!({
+        "scans": tracking.scans,
+        "keyframes": stats.keyframes,
+        "submaps": stats.keyframes.div_ceil(config.keyframes_per_submap.max(1)),
+        "loop_candidates": stats.loop_candidates,
+        "loop_closures_accepted": stats.loops_accepted,
+        "loop_closures_rejected": stats.loops_rejected,
+        "loop_closures_downweighted": stats.loops_downweighted,
+        "optimisations": stats.optimisations,
+        "keyframes_thinned": stats.thinned,
+        "relocalizations": tracking.guess_searches_used,
+        "relocalizations_failed": tracking.guess_searches_failed,
+        "predicted_scans": tracking.predicted_scans,
+        "lost_s": lost_s,
+        "wall_s": wall_s,
+        "realtime_factor": if wall_s > 0.0 { duration / wall_s } else { 0.0 },
+        "median_scan_us": percentile(&times_us, 0.5),
+        "p99_scan_us": percentile(&times_us, 0.99),
+        "peak_rss_mb": peak_rss_mb(),
+        "map_error_m": map_error.as_ref().map(|e| e.mean_m),
+        "map_error_far_fraction": map_error.as_ref().map(|e| e.far_fraction),
+        "map_occupied_cells": written.grid.as_ref().map(|g| g.occupied_cells().count()),
+    });
+    print_summary(&summary, args.json);
+    Ok(())
+}
+
+/// The process's peak resident memory, MB, from Linux's `/proc/self/status` (`None` elsewhere).
+fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}

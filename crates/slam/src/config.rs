@@ -1,0 +1,208 @@
+//! Every tunable of the SLAM front end in one place, with units and the reason for each default.
+
+use crate::correlative::{CorrelativeConfig, Rival};
+use plumbline_core::matching::local_map::{LineMapConfig, RefineConfig};
+use plumbline_core::matching::{MatchConfig, OdometryConfig};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlamConfig {
+    /// Scan-to-keyframe tracking (keyframe spacing, matcher).
+    pub odometry: OdometryConfig,
+    /// The rolling local map every keyframe is aligned with before it enters the graph.
+    pub local_map: LineMapConfig,
+    /// The keyframe's alignment with the local map. The scan matcher's pose weighs ten times
+    /// what it does in plain odometry: here the pose graph takes the drift out, so the local
+    /// map only has to hold heading between loops, and the matcher's near motion is kept
+    /// (0.05-1 gave Intel 0.018-0.019 m and MIT 0.030-0.032 m; at 5 the map no longer holds
+    /// Intel's heading and loops stop closing).
+    pub refine: RefineConfig,
+    /// Width of the rolling local map, m (the map is `(size / cell)²` cells of 64 B).
+    pub local_map_size_m: f32,
+    /// Keyframes per submap: a submap is frozen when it holds this many, and loop closures are
+    /// searched only against frozen submaps that are not the newest ones.
+    pub keyframes_per_submap: usize,
+    pub loops: LoopConfig,
+    /// A keyframe tied by a verified loop to an older one closer than this (m, rad) drops its
+    /// scan: it adds nothing to the map that the older one does not have.
+    pub thin_distance_m: f32,
+    pub thin_angle_rad: f32,
+    /// Accepted loops wait for this many keyframes before the graph is optimised (bounded
+    /// work: one optimisation of the whole graph costs milliseconds); the end of a run
+    /// optimises what is left.
+    pub optimise_every_keyframes: usize,
+    pub guard: GuardConfig,
+    pub noise: EdgeNoise,
+}
+
+impl Default for SlamConfig {
+    fn default() -> Self {
+        Self {
+            odometry: OdometryConfig {
+                matcher: MatchConfig {
+                    recovery_translation_m: 0.45,
+                    ..MatchConfig::default()
+                },
+                ..OdometryConfig::default()
+            },
+            local_map: LineMapConfig::default(),
+            refine: RefineConfig {
+                matcher_weight: 0.2,
+                ..RefineConfig::default()
+            },
+            local_map_size_m: 64.0,
+            keyframes_per_submap: 20,
+            loops: LoopConfig::default(),
+            thin_distance_m: 0.3,
+            thin_angle_rad: 0.25,
+            optimise_every_keyframes: 10,
+            guard: GuardConfig::default(),
+            noise: EdgeNoise::default(),
+        }
+    }
+}
+
+/// How loop closures are proposed and checked.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoopConfig {
+    /// Candidates are keyframes whose estimated position lies within this distance of the new
+    /// keyframe's, m, plus the drift the odometry may have gathered since (below).
+    pub search_radius_m: f32,
+    /// Drift allowance per metre travelled since the candidate, m/m.
+    pub drift_per_m: f32,
+    /// Candidates whose heading differs more than this see other walls through a 180° lidar, rad.
+    pub max_heading_difference_rad: f32,
+    /// At most this many candidates are verified per keyframe (the nearest first): bounded work
+    /// per scan.
+    pub max_candidates: usize,
+    /// Submaps younger than this (counting the current one) are not searched: the local map
+    /// already ties the keyframe to them.
+    pub min_submap_gap: usize,
+    /// A submap tied to the vehicle by a loop within this many keyframes is not searched again.
+    pub skip_connected_keyframes: usize,
+    /// The candidate's neighbours on each side that join it in the reference of the coarse
+    /// search (a 180° scan alone may see too little of a place seen from elsewhere).
+    pub reference_neighbours: usize,
+    /// Coarse search before the ICL check: the window around the graph's guess is the drift
+    /// the tracker may have gathered since the candidate (a floor plus a share of the distance
+    /// travelled, m and rad), at most the maximum; a pose needs at least `min_score` mean
+    /// likelihood to be considered.
+    pub correlative: CorrelativeConfig,
+    pub window_floor_m: f32,
+    pub window_max_m: f32,
+    pub window_floor_rad: f32,
+    pub window_rad_per_m: f32,
+    pub window_max_rad: f32,
+    pub min_score: f32,
+    /// A rival pose away from the best that scores almost as well makes the candidate
+    /// ambiguous: a row of alike rooms or doors fits the scan in two places.
+    pub rival: Rival,
+    /// Verification: the match must pair at least this fraction of the keyframe's points…
+    pub min_inlier_ratio: f32,
+    /// …with an RMS point-to-line residual at most this, m…
+    pub max_rms_m: f32,
+    /// …constrain both directions of translation at least this evenly (least over most
+    /// information; the matcher reports a corridor's axis below its own, smaller ratio)…
+    pub min_conditioning: f32,
+    /// …and move the coarse search's answer at most this far, m and rad (further means the
+    /// matcher slid into another basin).
+    pub max_correction_m: f32,
+    pub max_correction_rad: f32,
+    /// Matcher used for verification: ICL with its heading/pose recovery search.
+    pub matcher: MatchConfig,
+}
+
+impl Default for LoopConfig {
+    fn default() -> Self {
+        Self {
+            search_radius_m: 1.5,
+            drift_per_m: 0.05,
+            max_heading_difference_rad: 1.0,
+            max_candidates: 2,
+            min_submap_gap: 2,
+            skip_connected_keyframes: 3,
+            min_inlier_ratio: 0.5,
+            max_rms_m: 0.05,
+            min_conditioning: 0.1,
+            max_correction_m: 0.2,
+            max_correction_rad: 0.1,
+            reference_neighbours: 2,
+            correlative: CorrelativeConfig::default(),
+            window_floor_m: 0.3,
+            window_max_m: 1.5,
+            window_floor_rad: 0.05,
+            window_rad_per_m: 0.005,
+            window_max_rad: 0.35,
+            min_score: 0.3,
+            rival: Rival {
+                exclude_m: 0.5,
+                exclude_rad: 0.2,
+                ratio: 0.9,
+            },
+            // The coarse search has already found the basin; the matcher's own recovery
+            // would only search again.
+            matcher: MatchConfig {
+                recovery: false,
+                ..MatchConfig::default()
+            },
+        }
+    }
+}
+
+/// The check of the tracker's motion guess ([`crate::guard`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GuardConfig {
+    pub enabled: bool,
+    pub correlative: CorrelativeConfig,
+    /// A guess whose points' mean likelihood against the keyframe is at least this is kept.
+    pub min_guess_score: f32,
+    /// Otherwise the window searched around it, m and rad…
+    pub window_m: f32,
+    pub window_rad: f32,
+    /// …and a pose found there replaces it if it scores at least this…
+    pub min_found_score: f32,
+    /// …and this many times the guess's score.
+    pub min_gain: f32,
+}
+
+impl Default for GuardConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            correlative: CorrelativeConfig::default(),
+            min_guess_score: 0.3,
+            window_m: 1.0,
+            window_rad: std::f32::consts::PI,
+            min_found_score: 0.35,
+            min_gain: 1.5,
+        }
+    }
+}
+
+/// Standard deviations behind the information of graph edges. The matcher's own covariance
+/// assumes independent point errors and is about a hundred times too confident (the local map's
+/// `matcher_weight` documents the same), so edges use a simple motion model instead.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EdgeNoise {
+    /// Odometry edge: a floor plus a share of the distance travelled, m and m/m.
+    pub odometry_m: f32,
+    pub odometry_per_m: f32,
+    /// Odometry edge heading: a floor plus a share of the turn, rad and rad/rad.
+    pub odometry_rad: f32,
+    pub odometry_per_rad: f32,
+    /// Loop edge, m and rad.
+    pub loop_m: f32,
+    pub loop_rad: f32,
+}
+
+impl Default for EdgeNoise {
+    fn default() -> Self {
+        Self {
+            odometry_m: 0.01,
+            odometry_per_m: 0.03,
+            odometry_rad: 0.004,
+            odometry_per_rad: 0.03,
+            loop_m: 0.03,
+            loop_rad: 0.01,
+        }
+    }
+}

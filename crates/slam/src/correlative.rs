@@ -1,0 +1,526 @@
+//! Correlative scan matching with branch and bound (Olson 2009; Hess et al. 2016, sec. V):
+//! the exhaustive answer to "where in this window does the scan fit best", without visiting
+//! every pose.
+//!
+//! The reference points are stamped into a likelihood grid (a Gaussian of the distance to the
+//! nearest point, one byte a cell). Level `k` of the pyramid holds, at each cell, the largest
+//! value in the `2^k × 2^k` block starting there, so scoring a scan against level `k` at one
+//! translation bounds its score at every translation in that block from above. The search
+//! starts with coarse blocks for every heading, always expands the best bound first, and drops
+//! any block whose bound cannot beat the best complete answer: the result is the best pose on
+//! the fine grid, exactly, at a small fraction of the cost of scoring them all.
+
+use plumbline_core::geom::{Pose2, Vec2};
+
+/// How the grid is made and searched.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CorrelativeConfig {
+    /// Cell edge of the fine grid, m; also the translation step of the answer.
+    pub resolution_m: f32,
+    /// Spread of a point's likelihood, m.
+    pub sigma_m: f32,
+    /// Score at most this many current points (every k-th of a denser scan).
+    pub max_points: usize,
+    /// Points farther than this are not scored, m: the heading step must move the farthest
+    /// scored point by about a cell, so one wall at 40 m would multiply the headings searched.
+    pub max_range_m: f32,
+}
+
+impl Default for CorrelativeConfig {
+    fn default() -> Self {
+        Self {
+            resolution_m: 0.1,
+            sigma_m: 0.1,
+            max_points: 90,
+            max_range_m: 10.0,
+        }
+    }
+}
+
+/// The search window around a guess.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Window {
+    pub translation_m: f32,
+    pub heading_rad: f32,
+}
+
+/// The best pose found and how well the scan fits there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Found {
+    pub pose: Pose2,
+    /// Mean likelihood of the scored points, 0 to 1 (1: every point exactly on a reference point).
+    pub score: f32,
+}
+
+/// Likelihood grid of a reference point set with its max pyramid.
+pub struct LookupGrid {
+    origin: Vec2,
+    resolution: f32,
+    width: i32,
+    height: i32,
+    /// `levels[k]` is the max over `2^k × 2^k` blocks of `levels[0]`.
+    levels: Vec<Vec<u8>>,
+}
+
+const KERNEL_CELLS: i32 = 3;
+
+impl LookupGrid {
+    /// Builds the grid over the points' bounding box plus `margin_m` (the farthest a searched
+    /// scan may reach past the reference).
+    pub fn new(points: &[Vec2], margin_m: f32, config: &CorrelativeConfig, levels: usize) -> Self {
+        let res = config.resolution_m;
+        let (mut lo, mut hi) = (Vec2::new(f32::MAX, f32::MAX), Vec2::new(f32::MIN, f32::MIN));
+        for p in points.iter().filter(|p| p.is_finite()) {
+            lo = Vec2::new(lo.x.min(p.x), lo.y.min(p.y));
+            hi = Vec2::new(hi.x.max(p.x), hi.y.max(p.y));
+        }
+        if lo.x > hi.x {
+            lo = Vec2::ZERO;
+            hi = Vec2::ZERO;
+        }
+        let origin = Vec2::new(lo.x - margin_m, lo.y - margin_m);
+        let width = (((hi.x - lo.x + 2.0 * margin_m) / res).ceil() as i32 + 1).max(1);
+        let height = (((hi.y - lo.y + 2.0 * margin_m) / res).ceil() as i32 + 1).max(1);
+        let mut base = vec![0u8; (width * height) as usize];
+        let kernel = gaussian_kernel(res, config.sigma_m);
+        for p in points.iter().filter(|p| p.is_finite()) {
+            let cx = ((p.x - origin.x) / res) as i32;
+            let cy = ((p.y - origin.y) / res) as i32;
+            for dy in -KERNEL_CELLS..=KERNEL_CELLS {
+                for dx in -KERNEL_CELLS..=KERNEL_CELLS {
+                    let (x, y) = (cx + dx, cy + dy);
+                    if x < 0 || y < 0 || x >= width || y >= height {
+                        continue;
+                    }
+                    let v = kernel[((dy + KERNEL_CELLS) * (2 * KERNEL_CELLS + 1)
+                        + dx
+                        + KERNEL_CELLS) as usize];
+                    let cell = &mut base[(y * width + x) as usize];
+                    *cell = (*cell).max(v);
+                }
+            }
+        }
+        let mut grid = Self {
+            origin,
+            resolution: res,
+            width,
+            height,
+            levels: vec![base],
+        };
+        for k in 1..levels.max(1) {
+            let step = 1i32 << (k - 1);
+            let prev = &grid.levels[k - 1];
+            let at = |x: i32, y: i32| -> u8 {
+                if x < width && y < height {
+                    prev[(y * width + x) as usize]
+                } else {
+                    0
+                }
+            };
+            let mut next = vec![0u8; prev.len()];
+            for y in 0..height {
+                for x in 0..width {
+                    next[(y * width + x) as usize] = at(x, y)
+                        .max(at(x + step, y))
+                        .max(at(x, y + step))
+                        .max(at(x + step, y + step));
+                }
+            }
+            grid.levels.push(next);
+        }
+        grid
+    }
+
+    /// The largest fine value in the block `[x, x + 2^level) × [y, y + 2^level)`, or a bound
+    /// above it: a block hanging over the low edge is read from the edge cell, whose block covers
+    /// the part inside.
+    fn value(&self, level: usize, x: i32, y: i32) -> u8 {
+        let size = 1i32 << level;
+        if x + size <= 0 || y + size <= 0 || x >= self.width || y >= self.height {
+            return 0;
+        }
+        let (x, y) = (x.max(0), y.max(0));
+        self.levels[level][(y * self.width + x) as usize]
+    }
+
+    /// The best pose of `points` (current scan, own frame) within `window` of `guess`, if any
+    /// scores at least `min_score`.
+    pub fn search(
+        &self,
+        points: &[Vec2],
+        guess: Pose2,
+        window: Window,
+        min_score: f32,
+        config: &CorrelativeConfig,
+    ) -> Option<Found> {
+        let layout = self.layout(points, guess, window, config)?;
+        let threshold = (min_score * layout.norm) as u32;
+        let best = self.run(&layout, threshold, None)?;
+        Some(layout.found(self, best, guess))
+    }
+
+    /// The score of the best pose at least `exclude_m` or `exclude_rad` away from `winner` (a
+    /// [`Self::search`] answer with the same arguments) that reaches `ratio` of its score, if
+    /// one does: a second place almost as good means the scan fits two places (a row of alike
+    /// rooms), and the winner may be the wrong one.
+    pub fn rival(
+        &self,
+        points: &[Vec2],
+        guess: Pose2,
+        window: Window,
+        winner: &Found,
+        rival: Rival,
+        config: &CorrelativeConfig,
+    ) -> Option<f32> {
+        let layout = self.layout(points, guess, window, config)?;
+        let around = layout.candidate_of(self, winner.pose, guess);
+        let exclusion = Exclusion {
+            around,
+            cells: (rival.exclude_m / self.resolution).ceil() as i32,
+            headings: (rival.exclude_rad / layout.heading_step).ceil() as i32,
+        };
+        let floor = (winner.score * rival.ratio * layout.norm) as u32;
+        self.run(&layout, floor, Some(exclusion))
+            .map(|c| c.bound as f32 / layout.norm)
+    }
+
+    /// The scored points' cells for every heading of the window.
+    fn layout(
+        &self,
+        points: &[Vec2],
+        guess: Pose2,
+        window: Window,
+        config: &CorrelativeConfig,
+    ) -> Option<Layout> {
+        let scored = self.scored_points(points, config);
+        if scored.is_empty() {
+            return None;
+        }
+        let reach = scored
+            .iter()
+            .map(|p| p.norm())
+            .fold(0.0f32, f32::max)
+            .max(1.0);
+        // The heading step that moves the farthest point by about one cell.
+        let cos_step = 1.0 - self.resolution * self.resolution / (2.0 * reach * reach);
+        let heading_step = cos_step.clamp(-1.0, 1.0).acos().max(1e-4);
+        let headings = (window.heading_rad / heading_step).ceil() as i32;
+        let cells = (-headings..=headings)
+            .map(|h| {
+                let rotation = Pose2::new(guess.x, guess.y, guess.theta + h as f32 * heading_step);
+                scored
+                    .iter()
+                    .map(|&p| {
+                        let q = rotation.transform(p);
+                        (
+                            ((q.x - self.origin.x) / self.resolution).floor() as i32,
+                            ((q.y - self.origin.y) / self.resolution).floor() as i32,
+                        )
+                    })
+                    .collect()
+            })
+            .collect();
+        Some(Layout {
+            cells,
+            headings,
+            heading_step,
+            half: (window.translation_m / self.resolution).ceil() as i32,
+            norm: 255.0 * scored.len() as f32,
+        })
+    }
+
+    /// Branch and bound over the layout: the best leaf above `threshold`, outside `exclusion`.
+    fn run(
+        &self,
+        layout: &Layout,
+        threshold: u32,
+        exclusion: Option<Exclusion>,
+    ) -> Option<Candidate> {
+        let top = self.levels.len() - 1;
+        let top_step = 1i32 << top;
+        let half = layout.half;
+        let mut roots: Vec<Candidate> = Vec::new();
+        for (heading, cells) in layout.cells.iter().enumerate() {
+            let mut ix = -half;
+            while ix <= half {
+                let mut iy = -half;
+                while iy <= half {
+                    let bound = self.score(cells, top, ix, iy);
+                    if bound > threshold {
+                        roots.push(Candidate {
+                            heading,
+                            ix,
+                            iy,
+                            level: top,
+                            bound,
+                        });
+                    }
+                    iy += top_step;
+                }
+                ix += top_step;
+            }
+        }
+        roots.sort_by_key(|c| std::cmp::Reverse(c.bound));
+        let mut search = Search {
+            grid: self,
+            best: (threshold, None),
+            exclusion,
+        };
+        for root in roots {
+            search.expand(&layout.cells, root, half);
+        }
+        search.best.1
+    }
+
+    /// Mean likelihood of `points` placed at `pose` on the fine grid, 0 to 1.
+    pub fn score_pose(&self, points: &[Vec2], pose: Pose2, config: &CorrelativeConfig) -> f32 {
+        let scored = self.scored_points(points, config);
+        if scored.is_empty() {
+            return 0.0;
+        }
+        let sum: u32 = scored
+            .iter()
+            .map(|&p| {
+                let q = pose.transform(p);
+                let x = ((q.x - self.origin.x) / self.resolution).floor() as i32;
+                let y = ((q.y - self.origin.y) / self.resolution).floor() as i32;
+                self.value(0, x, y) as u32
+            })
+            .sum();
+        sum as f32 / (255.0 * scored.len() as f32)
+    }
+
+    /// The points a search scores: finite, within range, thinned to at most `max_points`.
+    fn scored_points(&self, points: &[Vec2], config: &CorrelativeConfig) -> Vec<Vec2> {
+        let near = |p: &Vec2| p.is_finite() && p.norm() <= config.max_range_m;
+        let count = points.iter().filter(|p| near(p)).count();
+        let stride = count.div_ceil(config.max_points.max(1)).max(1);
+        points
+            .iter()
+            .copied()
+            .filter(near)
+            .step_by(stride)
+            .collect()
+    }
+
+    fn score(&self, cells: &[(i32, i32)], level: usize, ix: i32, iy: i32) -> u32 {
+        cells
+            .iter()
+            .map(|&(x, y)| self.value(level, x + ix, y + iy) as u32)
+            .sum()
+    }
+}
+
+/// How a rival to the winner is looked for ([`LookupGrid::search_with_rival`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rival {
+    /// Poses within this distance and this turn of the winner are the winner's own peak.
+    pub exclude_m: f32,
+    pub exclude_rad: f32,
+    /// A rival counts from this fraction of the winner's score.
+    pub ratio: f32,
+}
+
+/// The scored points' cells per heading, and what turns a candidate back into a pose.
+struct Layout {
+    cells: Vec<Vec<(i32, i32)>>,
+    headings: i32,
+    heading_step: f32,
+    half: i32,
+    norm: f32,
+}
+
+impl Layout {
+    /// The leaf of `pose` (an answer of this layout).
+    fn candidate_of(&self, grid: &LookupGrid, pose: Pose2, guess: Pose2) -> Candidate {
+        let turn = plumbline_core::geom::normalize_angle(pose.theta - guess.theta);
+        Candidate {
+            heading: ((turn / self.heading_step).round() as i32 + self.headings).max(0) as usize,
+            ix: ((pose.x - guess.x) / grid.resolution).round() as i32,
+            iy: ((pose.y - guess.y) / grid.resolution).round() as i32,
+            level: 0,
+            bound: 0,
+        }
+    }
+
+    fn found(&self, grid: &LookupGrid, best: Candidate, guess: Pose2) -> Found {
+        let theta = guess.theta + (best.heading as i32 - self.headings) as f32 * self.heading_step;
+        Found {
+            pose: Pose2::new(
+                guess.x + best.ix as f32 * grid.resolution,
+                guess.y + best.iy as f32 * grid.resolution,
+                plumbline_core::geom::normalize_angle(theta),
+            ),
+            score: best.bound as f32 / self.norm,
+        }
+    }
+}
+
+/// Leaves this close to a winner are not rivals.
+#[derive(Clone, Copy, Debug)]
+struct Exclusion {
+    around: Candidate,
+    cells: i32,
+    headings: i32,
+}
+
+impl Exclusion {
+    fn contains(&self, c: &Candidate) -> bool {
+        (c.ix - self.around.ix).abs() <= self.cells
+            && (c.iy - self.around.iy).abs() <= self.cells
+            && (c.heading as i32 - self.around.heading as i32).abs() <= self.headings
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    heading: usize,
+    ix: i32,
+    iy: i32,
+    level: usize,
+    bound: u32,
+}
+
+struct Search<'g> {
+    grid: &'g LookupGrid,
+    /// Best complete score so far (starts at the acceptance threshold) and its candidate.
+    best: (u32, Option<Candidate>),
+    exclusion: Option<Exclusion>,
+}
+
+impl Search<'_> {
+    /// Depth first, best bound first; a block is opened only if it can beat the best so far.
+    fn expand(&mut self, cells: &[Vec<(i32, i32)>], c: Candidate, half: i32) {
+        if c.bound <= self.best.0 {
+            return;
+        }
+        if c.level == 0 {
+            if !self.exclusion.is_some_and(|e| e.contains(&c)) {
+                self.best = (c.bound, Some(c));
+            }
+            return;
+        }
+        let level = c.level - 1;
+        let step = 1i32 << level;
+        let mut children: Vec<Candidate> = Vec::with_capacity(4);
+        for (dx, dy) in [(0, 0), (step, 0), (0, step), (step, step)] {
+            let (ix, iy) = (c.ix + dx, c.iy + dy);
+            if ix > half || iy > half {
+                continue;
+            }
+            let bound = self.grid.score(&cells[c.heading], level, ix, iy);
+            children.push(Candidate {
+                heading: c.heading,
+                ix,
+                iy,
+                level,
+                bound,
+            });
+        }
+        children.sort_by_key(|c| std::cmp::Reverse(c.bound));
+        for child in children {
+            self.expand(cells, child, half);
+        }
+    }
+}
+
+/// Likelihood of a point at each offset of the stamping kernel, 0 to 255.
+fn gaussian_kernel(resolution: f32, sigma: f32) -> Vec<u8> {
+    let side = 2 * KERNEL_CELLS + 1;
+    let mut k = Vec::with_capacity((side * side) as usize);
+    for dy in -KERNEL_CELLS..=KERNEL_CELLS {
+        for dx in -KERNEL_CELLS..=KERNEL_CELLS {
+            let d2 = ((dx * dx + dy * dy) as f32) * resolution * resolution;
+            let v = (-d2 / (2.0 * sigma * sigma)).exp();
+            k.push((v * 255.0).round() as u8);
+        }
+    }
+    k
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An L-shaped room corner and a wall stub: enough structure to fix x, y and heading.
+    fn room() -> Vec<Vec2> {
+        let mut pts = Vec::new();
+        for i in 0..80 {
+            let s = i as f32 * 0.05;
+            pts.push(Vec2::new(s - 1.0, 2.0));
+            pts.push(Vec2::new(3.0, s - 1.5));
+            pts.push(Vec2::new(-1.0, s * 0.5 - 1.0));
+        }
+        pts
+    }
+
+    #[test]
+    fn finds_a_known_offset_from_a_wrong_guess() {
+        let cfg = CorrelativeConfig::default();
+        let reference = room();
+        let truth = Pose2::new(0.4, -0.3, 0.2);
+        let current: Vec<Vec2> = reference
+            .iter()
+            .map(|&p| truth.inverse().transform(p))
+            .collect();
+        let grid = LookupGrid::new(&reference, 1.0, &cfg, 6);
+        let window = Window {
+            translation_m: 0.8,
+            heading_rad: 0.4,
+        };
+        let found = grid
+            .search(&current, Pose2::IDENTITY, window, 0.3, &cfg)
+            .expect("a pose");
+        let (shift, turn) = found.pose.distance_to(truth);
+        // Within a cell and a heading step (the step that moves the farthest point a cell).
+        let cell = cfg.resolution_m;
+        let reach = current.iter().map(|p| p.norm()).fold(0.0, f32::max);
+        let step = (1.0 - cell * cell / (2.0 * reach * reach)).acos();
+        assert!(shift <= 1.5 * cell && turn <= step, "{found:?}");
+        assert!(found.score > 0.8, "{found:?}");
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        /// Pruning never loses the best fine-grid pose, wherever the truth lies in the window
+        /// (blocks hanging over the grid's edges included).
+        #[test]
+        fn branch_and_bound_equals_exhaustive_search(
+            x in -0.5f32..0.5, y in -0.5f32..0.5, t in -0.3f32..0.3, levels in 2usize..7,
+        ) {
+            let cfg = CorrelativeConfig::default();
+            let reference = room();
+            let truth = Pose2::new(x, y, t);
+            let current: Vec<Vec2> = reference
+                .iter()
+                .map(|&p| truth.inverse().transform(p))
+                .collect();
+            let window = Window {
+                translation_m: 0.6,
+                heading_rad: 0.35,
+            };
+            let pruned = LookupGrid::new(&reference, 0.2, &cfg, levels)
+                .search(&current, Pose2::IDENTITY, window, 0.0, &cfg);
+            let exhaustive = LookupGrid::new(&reference, 0.2, &cfg, 1)
+                .search(&current, Pose2::IDENTITY, window, 0.0, &cfg);
+            proptest::prop_assert_eq!(pruned.map(|f| f.score), exhaustive.map(|f| f.score));
+        }
+    }
+
+    #[test]
+    fn nothing_above_the_threshold_is_none_and_empty_input_is_none() {
+        let cfg = CorrelativeConfig::default();
+        let grid = LookupGrid::new(&room(), 1.0, &cfg, 4);
+        let far: Vec<Vec2> = (0..50).map(|i| Vec2::new(40.0, i as f32)).collect();
+        let w = Window {
+            translation_m: 0.2,
+            heading_rad: 0.05,
+        };
+        assert!(grid.search(&far, Pose2::IDENTITY, w, 0.2, &cfg).is_none());
+        assert!(grid.search(&[], Pose2::IDENTITY, w, 0.0, &cfg).is_none());
+        let empty = LookupGrid::new(&[], 0.5, &cfg, 3);
+        assert!(empty
+            .search(&room(), Pose2::IDENTITY, w, 0.1, &cfg)
+            .is_none());
+    }
+}

@@ -1,0 +1,329 @@
+//! Hit and miss counts stored in square tiles that are allocated when a beam first reaches
+//! them, so memory follows the area mapped rather than its bounding box (an L-shaped building
+//! or a long diagonal corridor costs its own area). The tiles hang off a dense index over the
+//! tile bounding box: one pointer per 64 x 64 cells, which keeps a cell lookup to two loads.
+
+use super::frame::{Cell, CellRect};
+use super::raycast::Line;
+
+/// Tiles are `TILE` x `TILE` cells.
+pub const TILE_SHIFT: u32 = 6;
+pub const TILE: usize = 1 << TILE_SHIFT;
+const TILE_MASK: i32 = TILE as i32 - 1;
+const TILE_CELLS: usize = TILE * TILE;
+
+/// One tile's counts, split into two arrays: most updates are misses along free space, and a
+/// dense `u16` array of misses keeps twice as many of them in each cache line.
+#[derive(Clone)]
+pub struct Tile {
+    pub hits: [u16; TILE_CELLS],
+    pub misses: [u16; TILE_CELLS],
+}
+
+impl Tile {
+    fn new() -> Box<Tile> {
+        Box::new(Tile {
+            hits: [0; TILE_CELLS],
+            misses: [0; TILE_CELLS],
+        })
+    }
+
+    /// Counts saturate by halving both, which keeps their ratio (the cell's state) intact.
+    fn halve(&mut self, k: usize) {
+        self.hits[k] /= 2;
+        self.misses[k] /= 2;
+    }
+}
+
+/// Bytes of one allocated tile.
+pub const TILE_BYTES: usize = core::mem::size_of::<Tile>();
+
+/// The tiles and their index.
+#[derive(Clone, Default)]
+pub struct Tiles {
+    /// Tile coordinates of index slot 0.
+    ti0: i32,
+    tj0: i32,
+    /// Index size in tiles.
+    tw: usize,
+    th: usize,
+    slots: Vec<Option<Box<Tile>>>,
+    allocated: usize,
+}
+
+fn tile_of(c: Cell) -> (i32, i32) {
+    (c.i >> TILE_SHIFT, c.j >> TILE_SHIFT)
+}
+
+fn offset_in_tile(c: Cell) -> usize {
+    (((c.j & TILE_MASK) as usize) << TILE_SHIFT) | (c.i & TILE_MASK) as usize
+}
+
+impl Tiles {
+    pub fn allocated(&self) -> usize {
+        self.allocated
+    }
+
+    /// Heap bytes held: tiles and index.
+    pub fn memory_bytes(&self) -> usize {
+        self.allocated * TILE_BYTES + self.slots.capacity() * core::mem::size_of::<usize>()
+    }
+
+    /// Tiles in `rect` that are not allocated yet: an upper bound on what inserting beams
+    /// inside `rect` can allocate, so a scan can be refused before it changes anything.
+    pub fn missing_in(&self, rect: CellRect) -> usize {
+        let (a, b) = (tile_of(rect.min), tile_of(rect.max));
+        let mut n = 0;
+        for tj in a.1..=b.1 {
+            for ti in a.0..=b.0 {
+                if self.slot(ti, tj).is_none_or(|k| self.slots[k].is_none()) {
+                    n += 1;
+                }
+            }
+        }
+        n
+    }
+
+    fn slot(&self, ti: i32, tj: i32) -> Option<usize> {
+        let (u, v) = (ti - self.ti0, tj - self.tj0);
+        (u >= 0 && v >= 0 && (u as usize) < self.tw && (v as usize) < self.th)
+            .then(|| v as usize * self.tw + u as usize)
+    }
+
+    /// Grows the index to cover `rect` (the caller has checked its size against the extent
+    /// limit). Only pointers move; tiles stay where they are.
+    pub fn cover(&mut self, rect: CellRect) {
+        let (a, b) = (tile_of(rect.min), tile_of(rect.max));
+        if self.slot(a.0, a.1).is_some() && self.slot(b.0, b.1).is_some() {
+            return;
+        }
+        let (ti0, tj0, ti1, tj1) = if self.tw == 0 {
+            (a.0, a.1, b.0, b.1)
+        } else {
+            (
+                a.0.min(self.ti0),
+                a.1.min(self.tj0),
+                b.0.max(self.ti0 + self.tw as i32 - 1),
+                b.1.max(self.tj0 + self.th as i32 - 1),
+            )
+        };
+        let (tw, th) = ((ti1 - ti0 + 1) as usize, (tj1 - tj0 + 1) as usize);
+        let mut slots: Vec<Option<Box<Tile>>> = Vec::new();
+        slots.resize_with(tw * th, || None);
+        for (k, tile) in self.slots.drain(..).enumerate() {
+            let (u, v) = ((k % self.tw) as i32, (k / self.tw) as i32);
+            let (ti, tj) = (self.ti0 + u, self.tj0 + v);
+            slots[(tj - tj0) as usize * tw + (ti - ti0) as usize] = tile;
+        }
+        (self.ti0, self.tj0, self.tw, self.th, self.slots) = (ti0, tj0, tw, th, slots);
+    }
+
+    /// The tile holding `c` and the cell's offset in it, allocating the tile on first use.
+    /// `c` must lie inside the covered rectangle.
+    #[inline]
+    fn tile_mut(&mut self, c: Cell) -> (&mut Tile, usize) {
+        let (ti, tj) = tile_of(c);
+        let k = (tj - self.tj0) as usize * self.tw + (ti - self.ti0) as usize;
+        let slot = &mut self.slots[k];
+        if slot.is_none() {
+            self.allocated += 1;
+        }
+        (slot.get_or_insert_with(Tile::new), offset_in_tile(c))
+    }
+
+    /// One beam passed through `c`.
+    #[inline]
+    pub fn add_miss(&mut self, c: Cell) {
+        let (t, k) = self.tile_mut(c);
+        if t.misses[k] == u16::MAX {
+            t.halve(k);
+        }
+        t.misses[k] += 1;
+    }
+
+    /// One miss in every cell of the line from `from` up to, not including, `to`: the cells of
+    /// [`super::raycast::trace`], walked in runs that stay inside one tile so that the tile is
+    /// looked up once a run (up to 64 cells) and each cell costs an increment and two adds.
+    /// Both cells must lie inside the covered rectangle.
+    pub fn add_misses_along(&mut self, from: Cell, to: Cell) {
+        let line = Line::new(from, to);
+        let Line {
+            major,
+            minor,
+            major_step,
+            minor_step,
+        } = line;
+        let offset_step = |(di, dj): (i32, i32)| di as isize + (dj as isize) * TILE as isize;
+        let (major_off, minor_off) = (offset_step(major_step), offset_step(minor_step));
+        let (sx, sy) = (major_step.0 + minor_step.0, major_step.1 + minor_step.1);
+        // Steps possible along one axis before leaving the tile (unbounded on a still axis).
+        let room = |local: i32, step: i32| match step {
+            1 => (TILE_MASK - local) as i64,
+            -1 => local as i64,
+            _ => i64::MAX,
+        };
+        let mut err = line.first_err();
+        let mut cell = from;
+        let mut left = major;
+        while left > 0 {
+            let (li, lj) = (cell.i & TILE_MASK, cell.j & TILE_MASK);
+            // Either coordinate moves at most one cell a step, so this many cells stay inside.
+            let run = left.min(1 + room(li, sx).min(room(lj, sy)));
+            let (tile, k) = self.tile_mut(cell);
+            let mut off = k as isize;
+            let mut minor_steps = 0i64;
+            for _ in 0..run {
+                let o = off as usize;
+                if tile.misses[o] == u16::MAX {
+                    tile.halve(o);
+                }
+                tile.misses[o] += 1;
+                if err > 0 {
+                    off += minor_off;
+                    err -= 2 * major;
+                    minor_steps += 1;
+                }
+                off += major_off;
+                err += 2 * minor;
+            }
+            let moved = |a: i32, b: i32| (i64::from(a) * run + i64::from(b) * minor_steps) as i32;
+            cell = Cell::new(
+                cell.i + moved(major_step.0, minor_step.0),
+                cell.j + moved(major_step.1, minor_step.1),
+            );
+            left -= run;
+        }
+    }
+
+    /// One beam ended in `c`.
+    #[inline]
+    pub fn add_hit(&mut self, c: Cell) {
+        let (t, k) = self.tile_mut(c);
+        if t.hits[k] == u16::MAX {
+            t.halve(k);
+        }
+        t.hits[k] += 1;
+    }
+
+    /// (hits, misses) of a cell; (0, 0) where nothing was ever observed.
+    pub fn counts(&self, c: Cell) -> (u16, u16) {
+        let (ti, tj) = tile_of(c);
+        match self.slot(ti, tj).and_then(|k| self.slots[k].as_deref()) {
+            Some(t) => {
+                let k = offset_in_tile(c);
+                (t.hits[k], t.misses[k])
+            }
+            None => (0, 0),
+        }
+    }
+
+    /// Every allocated tile with the cell of its lower-left corner.
+    pub fn iter(&self) -> impl Iterator<Item = (Cell, &Tile)> + '_ {
+        self.slots.iter().enumerate().filter_map(move |(k, t)| {
+            let (u, v) = ((k % self.tw) as i32, (k / self.tw) as i32);
+            let corner = Cell::new((self.ti0 + u) << TILE_SHIFT, (self.tj0 + v) << TILE_SHIFT);
+            t.as_deref().map(|t| (corner, t))
+        })
+    }
+}
+
+/// The cell at offset `k` of the tile whose lower-left cell is `corner`.
+pub fn cell_at(corner: Cell, k: usize) -> Cell {
+    Cell::new(
+        corner.i + (k & (TILE - 1)) as i32,
+        corner.j + (k >> TILE_SHIFT) as i32,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::raycast::trace;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The tile-run walk adds exactly the misses of the reference line, across tile
+        /// borders and on both sides of zero.
+        #[test]
+        fn runs_inside_tiles_add_the_reference_lines_misses(
+            ai in -200i32..200, aj in -200i32..200, bi in -200i32..200, bj in -200i32..200,
+        ) {
+            let (a, b) = (Cell::new(ai, aj), Cell::new(bi, bj));
+            let rect = CellRect::of(a).union(CellRect::of(b));
+            let (mut fast, mut reference) = (Tiles::default(), Tiles::default());
+            fast.cover(rect);
+            reference.cover(rect);
+            fast.add_misses_along(a, b);
+            fast.add_misses_along(a, b);
+            trace(a, b, |c| { reference.add_miss(c); reference.add_miss(c); });
+            for j in rect.min.j..=rect.max.j {
+                for i in rect.min.i..=rect.max.i {
+                    let c = Cell::new(i, j);
+                    prop_assert_eq!(fast.counts(c), reference.counts(c), "{:?}", c);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn counts_land_in_their_cell_across_tiles_and_the_index_grows_without_moving_them() {
+        let mut t = Tiles::default();
+        let cells = [
+            Cell::new(0, 0),
+            Cell::new(-1, -1),
+            Cell::new(63, 64),
+            Cell::new(-200, 150),
+        ];
+        for (n, &c) in cells.iter().enumerate() {
+            t.cover(CellRect::of(c));
+            for _ in 0..=n {
+                t.add_hit(c);
+            }
+            t.add_miss(c);
+        }
+        for (n, &c) in cells.iter().enumerate() {
+            assert_eq!(t.counts(c), (n as u16 + 1, 1), "{c:?}");
+        }
+        assert_eq!(t.counts(Cell::new(1, 0)), (0, 0));
+        assert_eq!(t.counts(Cell::new(10_000, 0)), (0, 0));
+        assert_eq!(t.allocated(), 4);
+        let found: Vec<Cell> = t
+            .iter()
+            .flat_map(|(corner, tile)| {
+                (0..TILE_CELLS)
+                    .filter(|&k| tile.hits[k] > 0)
+                    .map(move |k| cell_at(corner, k))
+            })
+            .collect();
+        assert_eq!(found.len(), 4);
+        assert!(cells.iter().all(|c| found.contains(c)));
+    }
+
+    #[test]
+    fn saturating_counts_keep_their_ratio() {
+        let mut t = Tiles::default();
+        let c = Cell::new(3, 3);
+        t.cover(CellRect::of(c));
+        for _ in 0..3 * u32::from(u16::MAX) {
+            t.add_miss(c);
+            t.add_miss(c);
+            t.add_hit(c);
+        }
+        let (h, m) = t.counts(c);
+        let ratio = f64::from(h) / (f64::from(h) + f64::from(m));
+        assert!((ratio - 1.0 / 3.0).abs() < 0.01, "{h} hits, {m} misses");
+    }
+
+    #[test]
+    fn missing_tiles_are_counted_before_allocation() {
+        let mut t = Tiles::default();
+        let r = CellRect {
+            min: Cell::new(-1, -1),
+            max: Cell::new(64, 0),
+        };
+        t.cover(r);
+        assert_eq!(t.missing_in(r), 6, "tiles -1..=1 by -1..=0");
+        t.add_miss(Cell::new(0, 0));
+        assert_eq!(t.missing_in(r), 5);
+    }
+}

@@ -1,0 +1,168 @@
+//! The SLAM driver: one call per scan, online or over a log.
+//!
+//! Tracking ([`crate::tracker`]) runs on the caller's thread and returns at once; keyframes go to
+//! the backend ([`crate::backend`]), inline or on a worker thread ([`crate::worker`]). A scan's
+//! pose is its keyframe's graph pose composed with the tracked motion from that keyframe, so
+//! when a loop closure moves the keyframes every scan moves with them.
+
+use crate::backend::{Backend, BackendStats};
+use crate::config::SlamConfig;
+use crate::guard::Guarded;
+use crate::tracker::{ConfigError, Tracker};
+use crate::worker::Worker;
+use plumbline_core::geom::Pose2;
+use plumbline_core::matching::local_map::MapCell;
+use plumbline_core::scan::Scan;
+
+/// Where one scan ended up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScanPose {
+    /// The keyframe the scan is anchored to (`None` before the first usable scan).
+    pub keyframe: Option<usize>,
+    /// The scan's pose in the frame of that keyframe.
+    pub relative: Pose2,
+    /// The scan's pose in the map frame as known now (later loop closures may move it).
+    pub pose: Pose2,
+    pub new_keyframe: bool,
+    /// The match failed and the pose is a prediction.
+    pub predicted: bool,
+}
+
+/// Counts of the scan path for the summary.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TrackingStats {
+    pub scans: usize,
+    pub predicted_scans: usize,
+    /// Motion guesses that fit badly and were replaced by a wide search, or could not be.
+    pub guess_searches_used: usize,
+    pub guess_searches_failed: usize,
+}
+
+/// Where the backend runs.
+enum BackendRun<const N: usize> {
+    Inline(Box<Backend<N>>),
+    Threaded(Worker<N>),
+}
+
+pub struct Slam<'m, const N: usize> {
+    tracker: Tracker<'m, N>,
+    backend: BackendRun<N>,
+    /// Tracker-frame poses of all keyframes, to place scans whose keyframe the backend has not
+    /// published yet.
+    keyframe_tracking: Vec<Pose2>,
+    stats: TrackingStats,
+}
+
+/// What a finished run leaves: the backend with its graph and keyframes, and the counts.
+pub struct Finished<const N: usize> {
+    pub backend: Backend<N>,
+    pub tracking: TrackingStats,
+}
+
+impl<'m, const N: usize> Slam<'m, N> {
+    /// `threaded`: run the backend on a worker thread (the online default), or inline (every
+    /// call finishes the keyframe's loop search; for tests and single-core boards).
+    pub fn new(
+        config: SlamConfig,
+        cells: &'m mut [MapCell],
+        threaded: bool,
+    ) -> Result<Self, ConfigError> {
+        let backend = if threaded {
+            BackendRun::Threaded(
+                Worker::spawn(config)
+                    .map_err(|e| ConfigError(format!("cannot start the SLAM worker: {e}")))?,
+            )
+        } else {
+            BackendRun::Inline(Box::new(Backend::new(config)))
+        };
+        Ok(Self {
+            tracker: Tracker::new(config, cells)?,
+            backend,
+            keyframe_tracking: Vec::new(),
+            stats: TrackingStats::default(),
+        })
+    }
+
+    pub fn tracking_stats(&self) -> TrackingStats {
+        self.stats
+    }
+
+    /// Feeds the next revolution; `prior` is the motion since the previous scan from another
+    /// source (wheel odometry), if any.
+    pub fn add_scan(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> ScanPose {
+        let tracked = self.tracker.track(scan, prior);
+        self.stats.scans += 1;
+        self.stats.predicted_scans += tracked.predicted as usize;
+        match tracked.guess {
+            Guarded::Searched { .. } => self.stats.guess_searches_used += 1,
+            Guarded::NothingBetter => self.stats.guess_searches_failed += 1,
+            Guarded::GuessKept => {}
+        }
+        let new_keyframe = tracked.keyframe.is_some();
+        if let Some(keyframe) = tracked.keyframe {
+            self.keyframe_tracking.push(keyframe.tracking_pose);
+            match &mut self.backend {
+                BackendRun::Inline(b) => b.add_keyframe(keyframe),
+                BackendRun::Threaded(w) => {
+                    w.send(keyframe);
+                }
+            }
+        }
+        let Some(anchor) = self.keyframe_tracking.len().checked_sub(1) else {
+            return ScanPose {
+                keyframe: None,
+                relative: Pose2::IDENTITY,
+                pose: tracked.pose,
+                new_keyframe,
+                predicted: tracked.predicted,
+            };
+        };
+        let relative = self.keyframe_tracking[anchor].between(tracked.pose);
+        ScanPose {
+            keyframe: Some(anchor),
+            relative,
+            pose: self.current_pose(anchor).compose(relative),
+            new_keyframe,
+            predicted: tracked.predicted,
+        }
+    }
+
+    /// The map-frame pose of keyframe `k` as known now: the backend's, or, if it has not got
+    /// that far, the newest it has published carried forward by the tracked motion.
+    fn current_pose(&self, k: usize) -> Pose2 {
+        let worker = match &self.backend {
+            BackendRun::Inline(b) => return b.poses()[k],
+            BackendRun::Threaded(w) => w,
+        };
+        match worker.pose_or_latest(k) {
+            Some(Ok(pose)) => pose,
+            Some(Err((l, pose))) => {
+                pose.compose(self.keyframe_tracking[l].between(self.keyframe_tracking[k]))
+            }
+            None => self.keyframe_tracking[k],
+        }
+    }
+
+    /// Backend counts so far (inline: exact; threaded: as last published).
+    pub fn backend_stats(&self) -> BackendStats {
+        match &self.backend {
+            BackendRun::Inline(b) => b.stats(),
+            BackendRun::Threaded(w) => w.stats(),
+        }
+    }
+
+    /// Waits for the backend to finish every keyframe; `None` if its thread died.
+    pub fn finish(self) -> Option<Finished<N>> {
+        let backend = match self.backend {
+            BackendRun::Inline(mut b) => {
+                b.finish();
+                *b
+            }
+            BackendRun::Threaded(w) => w.finish()?,
+        };
+        Some(Finished {
+            backend,
+            tracking: self.stats,
+        })
+    }
+}

@@ -1,0 +1,130 @@
+//! The scan path: every scan matched to the current keyframe, every keyframe aligned with the
+//! rolling local map, and the motion guess checked before each match ([`crate::guard`]).
+//! It owns no global state, so its cost per scan stays flat however large the map grows.
+
+use crate::config::SlamConfig;
+use crate::guard::{Guarded, GuessGuard};
+use crate::keyframe::Keyframe;
+use plumbline_core::geom::Pose2;
+use plumbline_core::matching::local_map::{LineMap, MapCell, MapUse, MappedOdometry};
+use plumbline_core::matching::OdometryStep;
+use plumbline_core::scan::Scan;
+
+/// What tracking made of one scan.
+#[derive(Clone, Debug)]
+pub struct Tracked {
+    /// Pose in the tracker's own (drifting) frame.
+    pub pose: Pose2,
+    /// The scan became a keyframe.
+    pub keyframe: Option<Keyframe>,
+    /// The match failed: the pose is a prediction.
+    pub predicted: bool,
+    pub guess: Guarded,
+}
+
+/// The local map could not be made from the configuration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConfigError(pub String);
+
+/// Cells the rolling local map needs for `config` (the caller owns them, as in the onboard code).
+pub fn local_map_cells(config: &SlamConfig) -> Vec<MapCell> {
+    let side = (config.local_map_size_m / config.local_map.cell_m)
+        .ceil()
+        .max(1.0) as usize;
+    vec![MapCell::default(); side * side]
+}
+
+pub struct Tracker<'m, const N: usize> {
+    config: SlamConfig,
+    odometry: Box<MappedOdometry<'m, N>>,
+    guard: GuessGuard,
+    /// The current keyframe (the guard checks guesses against it) and how many came before.
+    keyframe: Option<Keyframe>,
+    keyframes: usize,
+    path_m: f32,
+    /// The last pose and the motion that led to it (the lidar-only guess).
+    last_pose: Pose2,
+    last_motion: Pose2,
+}
+
+impl<'m, const N: usize> Tracker<'m, N> {
+    pub fn new(config: SlamConfig, cells: &'m mut [MapCell]) -> Result<Self, ConfigError> {
+        let map = LineMap::new(cells, config.local_map)
+            .map_err(|e| ConfigError(format!("local map: {e:?}")))?;
+        Ok(Self {
+            config,
+            odometry: Box::new(MappedOdometry::new(
+                config.odometry,
+                map,
+                config.refine,
+                None,
+            )),
+            guard: GuessGuard::new(config.guard),
+            keyframe: None,
+            keyframes: 0,
+            path_m: 0.0,
+            last_pose: Pose2::IDENTITY,
+            last_motion: Pose2::IDENTITY,
+        })
+    }
+
+    /// Tracks the next revolution; `prior` is the motion since the previous scan from another
+    /// source (wheel odometry), if any.
+    pub fn track(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> Tracked {
+        let (guess, prior) = self.guarded_prior(scan, prior);
+        let step = self.odometry.update(scan, prior);
+        let pose = self.odometry.pose();
+        self.last_motion = self.last_pose.between(pose);
+        self.last_pose = pose;
+        let keyframe = (!matches!(step.map, MapUse::NotKeyframe)).then(|| {
+            if let Some(previous) = &self.keyframe {
+                self.path_m += previous.tracking_pose.between(pose).translation().norm();
+            }
+            let submap = self.keyframes / self.config.keyframes_per_submap.max(1);
+            let predicted = matches!(step.map, MapUse::Skipped);
+            let kf = Keyframe::new(scan, pose, submap, self.path_m, predicted);
+            self.keyframe = Some(kf.clone());
+            self.keyframes += 1;
+            kf
+        });
+        Tracked {
+            pose,
+            keyframe,
+            predicted: matches!(step.step, OdometryStep::Predicted { .. }),
+            guess,
+        }
+    }
+
+    /// The current keyframe's index and its pose in the tracker's frame.
+    pub fn keyframe(&self) -> Option<(usize, &Keyframe)> {
+        self.keyframe.as_ref().map(|k| (self.keyframes - 1, k))
+    }
+
+    /// The motion prior for the tracker: the caller's, unless the guess it leads to fits the
+    /// keyframe badly and a wide search finds a better one.
+    fn guarded_prior(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> (Guarded, Option<Pose2>) {
+        let Some(keyframe) = &self.keyframe else {
+            return (Guarded::GuessKept, prior);
+        };
+        let motion = prior.filter(|p| p.is_finite()).unwrap_or(self.last_motion);
+        let guess = keyframe
+            .tracking_pose
+            .between(self.last_pose.compose(motion));
+        let points: Vec<_> = scan
+            .beams()
+            .iter()
+            .filter(|b| b.valid)
+            .map(|b| b.point())
+            .collect();
+        match self.guard.check(keyframe, self.keyframes, &points, guess) {
+            (checked @ Guarded::Searched { .. }, Some(found)) => (
+                checked,
+                Some(
+                    self.last_pose
+                        .between(keyframe.tracking_pose.compose(found)),
+                ),
+            ),
+            (checked, _) => (checked, prior),
+        }
+    }
+}
