@@ -3,7 +3,9 @@
 use crate::numeric::{within, Range};
 use crate::report::CliError;
 use clap::Args;
-use plumbline_io::carmen::{read_log, CarmenLog, FovRule, ReadOptions, FLASER_MAX_RANGE_M};
+use plumbline_io::carmen::{
+    read_log, CarmenLog, FovRule, ReadOptions, ReadStats, FLASER_MAX_RANGE_M,
+};
 use std::path::Path;
 
 #[derive(Args, Debug, Clone)]
@@ -24,30 +26,45 @@ pub struct LogArgs {
 }
 
 impl LogArgs {
-    pub fn read(&self, path: &Path) -> Result<CarmenLog, CliError> {
+    /// The reader options; their values were checked while the command line was read.
+    pub fn options(&self) -> ReadOptions {
         let fov = match self.fov_deg {
             None => FovRule::Conventional,
             Some(d) => FovRule::Radians(d.to_radians()),
         };
-        let opts = ReadOptions {
+        ReadOptions {
             fov,
             flaser_max_range_m: self.max_range,
             skip_bad_lines: self.skip_bad_lines,
-        };
-        let log = read_log(path, &opts)?;
-        if log.stats.bad_lines > 0 {
-            eprintln!(
-                "plumbline: passed over {} malformed line(s); first: {}",
-                log.stats.bad_lines,
-                log.stats.first_bad_line.as_deref().unwrap_or("?")
-            );
         }
+    }
+
+    /// Reads a whole log into memory, for commands that need all of it at once.
+    pub fn read(&self, path: &Path) -> Result<CarmenLog, CliError> {
+        let log = read_log(path, &self.options())?;
+        report_bad_lines(&log.stats);
         if log.scans.is_empty() {
-            return Err(CliError(format!(
-                "{}: no FLASER or ROBOTLASER1 scans in the log",
-                path.display()
-            )));
+            return Err(no_scans(path));
         }
         Ok(log)
     }
+}
+
+/// Says how many malformed lines `--skip-bad-lines` passed over, and the first of them.
+pub fn report_bad_lines(stats: &ReadStats) {
+    if stats.bad_lines > 0 {
+        eprintln!(
+            "plumbline: passed over {} malformed line(s); first: {}",
+            stats.bad_lines,
+            stats.first_bad_line.as_deref().unwrap_or("?")
+        );
+    }
+}
+
+/// The error for a log without one scan.
+pub fn no_scans(path: &Path) -> CliError {
+    CliError(format!(
+        "{}: no FLASER or ROBOTLASER1 scans in the log",
+        path.display()
+    ))
 }

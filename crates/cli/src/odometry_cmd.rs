@@ -1,9 +1,12 @@
 //! `plumbline odometry LOG`: lidar-only scan-to-scan odometry over a log (DESIGN.md §4).
+//!
+//! The log is read a scan at a time and each pose written as it is computed, so memory stays
+//! flat however long the log, and a run that is stopped keeps the trajectory so far.
 
-use crate::log_args::LogArgs;
+use crate::log_args::{no_scans, report_bad_lines, LogArgs};
 use crate::numeric::{within, Range};
-use crate::plot::plot_trajectory;
-use crate::report::{print_summary, progress, CliError, CliResult};
+use crate::plot::{plot_trajectory, stage_png, write_png, TrajectoryPlot};
+use crate::report::{print_summary, progress_bytes, CliError, CliResult};
 use clap::Args;
 use plumbline_core::geom::Pose2;
 use plumbline_core::matching::local_map::{
@@ -14,10 +17,12 @@ use plumbline_core::matching::{
     LidarOdometry, MatchConfig, MatcherKind, OdometryConfig, OdometryStep,
 };
 use plumbline_core::scan::Scan;
-use plumbline_io::carmen::OdomPose;
-use plumbline_io::trajectory::{write_trajectory, TrajectoryPoint};
+use plumbline_io::carmen::{open_log, OdomPose};
+use plumbline_io::output::{check_distinct, OutputFile};
+use plumbline_io::trajectory::{TrajectoryPoint, TrajectoryWriter};
 use serde_json::json;
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Largest scan the command takes (a UTM-30LX has 1081 beams).
@@ -33,10 +38,10 @@ pub struct OdometryArgs {
     /// Use the log's odometry as the initial guess (default: lidar only, constant velocity).
     #[arg(long)]
     pub odom_prior: bool,
-    /// Write the trajectory (`timestamp x y theta`) here.
+    /// Write the trajectory (`timestamp x y theta`) here, a line per scan as it is computed.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Draw the trajectory over the scan points into this PNG.
+    /// Draw the trajectory over the scan points into this PNG (a `.png` file).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// New keyframe after this much travel, m. Valid range: (0, 10].
@@ -77,7 +82,13 @@ pub struct OdometryArgs {
 pub fn run(args: OdometryArgs) -> CliResult {
     let kind = MatcherKind::from_name(&args.matcher)
         .ok_or_else(|| CliError(format!("unknown matcher {}", args.matcher)))?;
-    let log = args.log_args.read(&args.log)?;
+    // Everything that can be checked without the work comes first: options, names, outputs.
+    let outputs: Vec<(&str, &Path)> = [("--out", &args.out), ("--plot", &args.plot)]
+        .into_iter()
+        .filter_map(|(role, p)| p.as_deref().map(|p| (role, p)))
+        .collect();
+    check_distinct(&[("LOG", &args.log)], &outputs)?;
+    let read_options = args.log_args.options();
     let config = OdometryConfig {
         matcher: MatchConfig::with_kind(kind),
         keyframe_distance_m: args.keyframe_distance,
@@ -98,6 +109,17 @@ pub fn run(args: OdometryArgs) -> CliResult {
     } else {
         0
     };
+    let (mut reader, read_progress) = open_log(&args.log, &read_options)?;
+    let mut traj_out = args
+        .out
+        .as_deref()
+        .map(|p| OutputFile::stage(p).map(TrajectoryWriter::new))
+        .transpose()?;
+    let plot_out = args
+        .plot
+        .as_deref()
+        .map(|p| stage_png("--plot", p))
+        .transpose()?;
     let mut cells = vec![MapCell::default(); side * side];
     let mut odometry = if use_map {
         let map = LineMap::new(&mut cells, map_config)
@@ -111,23 +133,30 @@ pub fn run(args: OdometryArgs) -> CliResult {
     };
     let (mut map_refined, mut map_refused, mut map_relocalized) = (0usize, 0usize, 0usize);
     let mut map_implausible = 0usize;
-    let bar = progress(log.scans.len() as u64, "odometry");
-    let mut times_us = Vec::with_capacity(log.scans.len());
-    let mut trajectory = Vec::with_capacity(log.scans.len());
+    let bar = progress_bytes(read_progress.total, "odometry");
+    let mut plot = plot_out.as_ref().map(|_| TrajectoryPlot::new());
+    let mut times_us = Vec::new();
     let (mut failed, mut keyframes, mut degenerate, mut rejected) = (0usize, 0usize, 0usize, 0u64);
     let (mut recovered, mut iterations) = (0usize, 0u64);
     let mut first_failure: Option<String> = None;
     let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
     let mut previous_odom: Option<OdomPose> = None;
     let mut lost = LostTally::default();
-    for (i, rec) in log.scans.iter().enumerate() {
+    let mut scans = 0usize;
+    loop {
+        let rec = match reader.next_scan() {
+            Ok(Some(rec)) => rec,
+            Ok(None) => break,
+            Err(e) => return Err(kept_so_far(e.into(), traj_out.take(), scans)),
+        };
+        scans += 1;
         *scan = rec.to_scan().map_err(|_| {
-            CliError(format!(
-                "{}: scan {} has {} beams; at most {MAX_BEAMS} are supported",
+            let e = CliError(format!(
+                "{}: scan {scans} has {} beams; at most {MAX_BEAMS} are supported",
                 args.log.display(),
-                i + 1,
                 rec.beam_count()
-            ))
+            ));
+            kept_so_far(e, traj_out.take(), scans - 1)
         })?;
         let prior = match (args.odom_prior, previous_odom, rec.odom) {
             (true, Some(a), Some(b)) => Some(a.between(b).to_f32()),
@@ -162,21 +191,32 @@ pub fn run(args: OdometryArgs) -> CliResult {
             OdometryStep::Predicted { error, .. } => {
                 failed += 1;
                 first_failure.get_or_insert_with(|| {
-                    format!("scan {} at {}: {error}", i + 1, rec.timestamp_text)
+                    format!("scan {scans} at {}: {error}", rec.timestamp_text)
                 });
             }
         }
         let predicted = matches!(step, OdometryStep::Predicted { .. });
         lost.note(rec.timestamp_s, predicted);
-        trajectory.push(TrajectoryPoint {
-            timestamp_text: rec.timestamp_text.clone(),
-            timestamp_s: rec.timestamp_s,
-            pose: OdomPose::from_f32(odometry.pose()),
-            lost: predicted,
-        });
-        bar.inc(1);
+        let pose = OdomPose::from_f32(odometry.pose());
+        if let Some(w) = traj_out.as_mut() {
+            let point = TrajectoryPoint {
+                timestamp_text: rec.timestamp_text.clone(),
+                timestamp_s: rec.timestamp_s,
+                pose,
+                lost: predicted,
+            };
+            write_pose(w, &point)?;
+        }
+        if let Some(p) = plot.as_mut() {
+            p.add(&rec, pose);
+        }
+        bar.set_position(read_progress.bytes_read());
     }
     bar.finish_and_clear();
+    report_bad_lines(reader.stats());
+    if scans == 0 {
+        return Err(no_scans(&args.log));
+    }
     if let Some(f) = &first_failure {
         eprintln!(
             "plumbline: {failed} match(es) failed and were bridged by prediction; first: {f}"
@@ -189,16 +229,16 @@ pub fn run(args: OdometryArgs) -> CliResult {
             lost.seconds, lost.intervals, lost.scans
         );
     }
-    if let Some(path) = &args.out {
-        write_file(path, |w| write_trajectory(w, &trajectory))?;
+    if let Some(w) = traj_out {
+        finish_trajectory(w)?.commit()?;
     }
-    if let Some(path) = &args.plot {
-        plot_trajectory(path, &log.scans, &trajectory)
-            .map_err(|e| CliError(format!("{}: {e}", path.display())))?;
+    if let (Some(out), Some(data)) = (plot_out, &plot) {
+        write_png(out, |p| plot_trajectory(p, data))?;
     }
     times_us.sort_by(f64::total_cmp);
+    let stats = reader.stats();
     let summary = json!({
-        "scans": log.scans.len(),
+        "scans": scans,
         "matcher": kind.name(),
         "median_match_us": percentile(&times_us, 0.5),
         "p99_match_us": percentile(&times_us, 0.99),
@@ -217,11 +257,49 @@ pub fn run(args: OdometryArgs) -> CliResult {
         "map_refused_keyframes": map_refused,
         "map_implausible_keyframes": map_implausible,
         "map_relocalized_keyframes": map_relocalized,
-        "non_monotonic_scans": log.stats.non_monotonic_scans,
-        "bad_lines": log.stats.bad_lines,
+        "non_monotonic_scans": stats.non_monotonic_scans,
+        "bad_lines": stats.bad_lines,
     });
     print_summary(&summary, args.json);
     Ok(())
+}
+
+/// Writes one trajectory line and flushes it, so a run that is killed keeps every pose it
+/// computed; the first line replaces the old file.
+fn write_pose(w: &mut TrajectoryWriter<OutputFile>, point: &TrajectoryPoint) -> CliResult {
+    w.push(point)
+        .and_then(|()| w.get_mut().flush())
+        .map_err(|e| w.get_ref().error(e))?;
+    let out = w.get_mut();
+    if !out.is_published() {
+        out.publish()?;
+    }
+    Ok(())
+}
+
+/// Closes an open run of lost poses with its `# lost` line and hands back the file.
+fn finish_trajectory(w: TrajectoryWriter<OutputFile>) -> Result<OutputFile, CliError> {
+    let shown = w.get_ref().shown().to_string();
+    w.finish().map_err(|e| CliError(format!("{shown}: {e}")))
+}
+
+/// An error part way through a log, saying where the poses computed before it are (with the
+/// last run of lost poses marked as such).
+fn kept_so_far(e: CliError, out: Option<TrajectoryWriter<OutputFile>>, scans: usize) -> CliError {
+    match out {
+        Some(w) if w.get_ref().is_published() => {
+            let shown = w.get_ref().shown().to_string();
+            let kept =
+                finish_trajectory(w).and_then(|mut f| Ok(f.flush().map_err(|e| f.error(e))?));
+            match kept {
+                Ok(()) => CliError(format!(
+                    "{e} (the trajectory of the {scans} scan(s) before it is in {shown})"
+                )),
+                Err(k) => CliError(format!("{e} (and the trajectory so far: {k})")),
+            }
+        }
+        _ => e,
+    }
 }
 
 /// Cells per side of the local map: each option is in its range already (checked while parsing),
@@ -300,18 +378,4 @@ pub fn percentile(sorted: &[f64], p: f64) -> f64 {
     }
     let k = ((sorted.len() as f64 * p).ceil() as usize).clamp(1, sorted.len()) - 1;
     (sorted[k] * 100.0).round() / 100.0
-}
-
-/// Creates the file (and its directory) and writes it through a buffer, naming the path on error.
-pub fn write_file(
-    path: &std::path::Path,
-    body: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
-) -> CliResult {
-    let named = |e: std::io::Error| CliError(format!("{}: {e}", path.display()));
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(named)?;
-    }
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(named)?);
-    body(&mut w).map_err(named)?;
-    std::io::Write::flush(&mut w).map_err(named)
 }

@@ -26,22 +26,114 @@ pub fn fonts_available() -> bool {
     })
 }
 
+use crate::report::{CliError, CliResult};
 use plotters::prelude::*;
-use plumbline_io::carmen::LaserRecord;
-use plumbline_io::trajectory::TrajectoryPoint;
+use plumbline_io::carmen::{LaserRecord, OdomPose};
+use plumbline_io::output::OutputFile;
+use std::path::Path;
 
-/// Top view: every scan's points placed by its estimated pose (grey), the path on top (red).
-/// A good trajectory draws crisp walls; drift shows as doubled or smeared walls.
+/// Plots are PNG files, and the encoder picks the format by the name: refuse any other name up
+/// front, before any work, with what to do instead.
+fn require_png(option: &str, path: &Path) -> Result<(), CliError> {
+    let is_png = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if is_png {
+        Ok(())
+    } else {
+        Err(CliError(format!(
+            "{option} {}: plots are written as PNG; give a file name ending in .png",
+            path.display()
+        )))
+    }
+}
+
+/// A PNG output, staged: the name checked and the file creatable before any work is done.
+pub fn stage_png(option: &str, path: &Path) -> Result<OutputFile, CliError> {
+    require_png(option, path)?;
+    Ok(OutputFile::stage(path)?)
+}
+
+/// Draws into a staged PNG and puts it in place, so an existing picture is only ever replaced
+/// by a finished one; `draw` renders into the path it is given.
+pub fn write_png(
+    out: OutputFile,
+    draw: impl FnOnce(&Path) -> Result<(), Box<dyn std::error::Error>>,
+) -> CliResult {
+    draw(out.current_path()).map_err(|e| CliError(format!("{}: {e}", out.shown())))?;
+    Ok(out.commit()?)
+}
+
+/// Enough scans to show the walls without drawing millions of pixels.
+const PLOT_SCANS: usize = 800;
+/// Path points kept; a path is drawn as a line, so more would not show.
+const PLOT_PATH_POINTS: usize = 20_000;
+
+/// Every `stride`-th item of a stream, the stride doubling whenever twice `keep` are held, so
+/// between `keep` and `2 keep` evenly spaced items are held however long the stream is.
+struct EvenSample<T> {
+    keep: usize,
+    stride: usize,
+    next_index: usize,
+    items: Vec<(usize, T)>,
+}
+
+impl<T> EvenSample<T> {
+    fn new(keep: usize) -> Self {
+        Self {
+            keep,
+            stride: 1,
+            next_index: 0,
+            items: Vec::new(),
+        }
+    }
+
+    fn push(&mut self, make: impl FnOnce() -> T) {
+        let i = self.next_index;
+        self.next_index += 1;
+        if !i.is_multiple_of(self.stride) {
+            return;
+        }
+        self.items.push((i, make()));
+        if self.items.len() >= 2 * self.keep {
+            self.stride *= 2;
+            let stride = self.stride;
+            self.items.retain(|(k, _)| k.is_multiple_of(stride));
+        }
+    }
+}
+
+/// What the trajectory plot needs from a run, gathered as scans go by with bounded memory.
+pub struct TrajectoryPlot {
+    scans: EvenSample<(LaserRecord, OdomPose)>,
+    path: EvenSample<(f64, f64)>,
+    last: Option<(f64, f64)>,
+}
+
+impl TrajectoryPlot {
+    pub fn new() -> Self {
+        Self {
+            scans: EvenSample::new(PLOT_SCANS),
+            path: EvenSample::new(PLOT_PATH_POINTS),
+            last: None,
+        }
+    }
+
+    pub fn add(&mut self, rec: &LaserRecord, pose: OdomPose) {
+        self.scans.push(|| (rec.clone(), pose));
+        self.path.push(|| (pose.x_m, pose.y_m));
+        self.last = Some((pose.x_m, pose.y_m));
+    }
+}
+
+/// Top view: sampled scans' points placed by their estimated pose (grey), the path on top
+/// (red). A good trajectory draws crisp walls; drift shows as doubled or smeared walls.
 pub fn plot_trajectory(
-    path: &std::path::Path,
-    scans: &[LaserRecord],
-    trajectory: &[TrajectoryPoint],
+    path: &Path,
+    data: &TrajectoryPlot,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    // Enough points to show the walls without drawing millions of pixels on long logs.
-    let stride = (scans.len() / 800).max(1);
     let mut cloud = Vec::new();
-    for (rec, tp) in scans.iter().zip(trajectory).step_by(stride) {
-        let p = tp.pose;
+    for (_, (rec, p)) in &data.scans.items {
         let (s, c) = p.theta_rad.sin_cos();
         for (i, (&r, &ok)) in rec.ranges_m.iter().zip(&rec.valid).enumerate() {
             if ok && r < 30.0 {
@@ -51,10 +143,8 @@ pub fn plot_trajectory(
             }
         }
     }
-    let path_xy: Vec<(f64, f64)> = trajectory
-        .iter()
-        .map(|t| (t.pose.x_m, t.pose.y_m))
-        .collect();
+    let mut path_xy: Vec<(f64, f64)> = data.path.items.iter().map(|(_, p)| *p).collect();
+    path_xy.extend(data.last.filter(|l| path_xy.last() != Some(l)));
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(x, y) in cloud.iter().chain(&path_xy) {
         (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));

@@ -45,3 +45,23 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
     bar.set_message(what.to_string());
     bar
 }
+
+/// A progress bar over the bytes of an input file (a spinner when its length is unknown), on a
+/// terminal only.
+pub fn progress_bytes(total: Option<u64>, what: &str) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let (bar, template) = match total {
+        Some(len) => (
+            ProgressBar::new(len),
+            "{msg} [{bar:40}] {bytes}/{total_bytes} ({eta})",
+        ),
+        None => (ProgressBar::new_spinner(), "{msg} {spinner} {bytes}"),
+    };
+    if let Ok(style) = ProgressStyle::with_template(template) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(what.to_string());
+    bar
+}

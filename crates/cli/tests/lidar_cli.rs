@@ -1,11 +1,14 @@
 //! `plumbline lidar` end to end: the real XV-11 capture decoded to a CARMEN log and read back,
 //! bad input as clear errors, and recording through a virtual serial port pair (socat).
 
+mod support;
+
 use plumbline_io::carmen::{read_log, ReadOptions};
 use plumbline_io::serial::{decode_capture, Device};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
+use support::socat_pair;
 
 const BIN: &str = env!("CARGO_BIN_EXE_plumbline");
 const CAPTURES: &str = concat!(
@@ -118,48 +121,6 @@ fn plot_draws_a_png() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("revolution 999 asked, 161 decoded"));
 }
 
-/// A `socat` process joining two pseudo-terminals, `a` and `b`; killed when dropped.
-struct Socat {
-    child: std::process::Child,
-    a: PathBuf,
-    b: PathBuf,
-}
-
-impl Drop for Socat {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// Starts socat in `dir`; `None`, with the reason printed, where it cannot run.
-fn socat_pair(dir: &Path, test: &str) -> Option<Socat> {
-    let (a, b) = (dir.join("dev-a"), dir.join("dev-b"));
-    let spawned = Command::new("socat")
-        .arg(format!("pty,raw,echo=0,link={}", a.display()))
-        .arg(format!("pty,raw,echo=0,link={}", b.display()))
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn();
-    let child = match spawned {
-        Ok(child) => child,
-        Err(e) => {
-            println!("SKIPPED {test}: socat not runnable ({e}); scripts/setup.sh installs it");
-            return None;
-        }
-    };
-    let socat = Socat { child, a, b };
-    let start = Instant::now();
-    while !(socat.a.exists() && socat.b.exists()) {
-        assert!(
-            start.elapsed() < Duration::from_secs(5),
-            "socat made no pty pair within 5 s"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    Some(socat)
-}
-
 #[test]
 fn record_through_a_virtual_serial_port_equals_the_file_decode() {
     let dir = tmp_dir("record");
@@ -197,7 +158,7 @@ fn record_through_a_virtual_serial_port_equals_the_file_decode() {
     // The capture is sent in well under a second; the silence after it ends the recording.
     assert_eq!(summary["stopped_by_silence"], true);
     let log = read_log(&dir.join("rec.bin.log"), &ReadOptions::default()).unwrap();
-    let (file_scans, _) = decode_capture(Device::Xv11, &bytes, 115_200);
+    let (file_scans, _) = decode_capture(Device::Xv11, &bytes, 115_200).unwrap();
     assert_eq!(log.scans.len(), file_scans.len());
     for (got, want) in log.scans.iter().zip(&file_scans) {
         assert_eq!(got.valid, want.record.valid);

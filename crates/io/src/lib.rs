@@ -1,9 +1,11 @@
 //! Files and devices around `plumbline-core`: CARMEN logs, relations, trajectories, sensor
-//! logs as CSV, the relations metric, and the one way output files are created.
+//! logs as CSV and the relations metric; the one way every command opens its inputs and writes
+//! its outputs.
 #![forbid(unsafe_code)]
 
 pub mod carmen;
 pub mod eval;
+pub mod input;
 pub mod output;
 mod pose_math;
 pub mod relations;

@@ -1,8 +1,8 @@
 //! Whitespace-separated numeric tables (relations, trajectories): one parser with line-numbered
 //! errors so both file types fail the same clear way.
 
-use crate::carmen::{open_text, ReadError};
-use std::io::BufRead;
+use crate::carmen::ReadError;
+use crate::input::{open_input, TextLines};
 use std::path::Path;
 
 /// One parsed row: the raw first field (timestamps are kept as written) and all fields as numbers.
@@ -11,7 +11,7 @@ pub struct Row<'a> {
     pub values: Vec<f64>,
 }
 
-/// Reads a file (gzip when it ends in `.gz`) into rows of exactly `columns` finite numbers.
+/// Reads a file (gzip recognised by content) into rows of exactly `columns` finite numbers.
 /// Blank lines and `#` comments are passed over.
 pub fn read_rows(
     path: &Path,
@@ -29,14 +29,14 @@ pub fn read_rows_and_comments(
     mut visit: impl FnMut(Row) -> Result<(), ReadError>,
     mut comment: impl FnMut(&str) -> Result<(), String>,
 ) -> Result<(), ReadError> {
-    let (name, reader) = open_text(path)?;
-    for (i, line) in reader.lines().enumerate() {
+    let input = open_input(path)?;
+    let mut lines = TextLines::new(input.reader, &input.name);
+    while let Some((line_no, line)) = lines.next_line()? {
         let err = |message: String| ReadError {
-            file: name.clone(),
-            line: i + 1,
+            file: input.name.clone(),
+            line: line_no,
             message,
         };
-        let line = line.map_err(|e| err(format!("cannot read: {e}")))?;
         let trimmed = line.trim();
         if let Some(text) = trimmed.strip_prefix('#') {
             comment(text).map_err(err)?;

@@ -60,6 +60,16 @@ impl<W: Write> TrajectoryWriter<W> {
         Ok(())
     }
 
+    /// The underlying writer, for flushing it or asking about it between points.
+    pub fn get_ref(&self) -> &W {
+        &self.out
+    }
+
+    /// The underlying writer, mutably; the points already pushed are written into it.
+    pub fn get_mut(&mut self) -> &mut W {
+        &mut self.out
+    }
+
     /// Closes an open run of lost poses and hands back the writer.
     pub fn finish(mut self) -> std::io::Result<W> {
         self.close_lost_run()?;

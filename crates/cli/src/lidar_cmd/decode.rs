@@ -1,21 +1,26 @@
 //! `plumbline lidar decode --device D CAPTURE [--out LOG]`.
 
-use super::{read_capture, require_frames, summary_json, write_log, BAUD_RANGE};
+use super::{require_frames, summary_json, BAUD_RANGE};
 use crate::numeric::within;
-use crate::report::{print_summary, CliResult};
+use crate::report::{print_summary, CliError, CliResult};
 use clap::Args;
-use plumbline_io::serial::{decode_capture, Device};
+use plumbline_io::carmen::write_robotlaser1;
+use plumbline_io::input::open_input;
+use plumbline_io::output::{check_distinct, OutputFile};
+use plumbline_io::serial::{decode_stream, Device};
 use serde_json::Value;
 use std::path::PathBuf;
 
+/// Decodes as it reads, with bounded memory: a capture with no valid frame in its first MiB
+/// (or in any MiB after its last frame) is refused there rather than read to its end.
 #[derive(Args)]
 pub struct DecodeArgs {
     /// xv11 | xv11-old | urg | rplidar
     #[arg(long)]
     device: Device,
-    /// The raw capture.
+    /// The raw capture (gzip-compressed is fine).
     capture: PathBuf,
-    /// Write the scans as a CARMEN ROBOTLASER1 log.
+    /// Write the scans as a CARMEN ROBOTLASER1 log (replaced only when the decode succeeds).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Line speed the capture was taken at; stamps scans by byte position (default: the device's).
@@ -28,12 +33,21 @@ pub struct DecodeArgs {
 }
 
 pub fn run(a: DecodeArgs) -> CliResult {
-    let bytes = read_capture(&a.capture)?;
-    let (scans, summary) =
-        decode_capture(a.device, &bytes, a.baud.unwrap_or(a.device.default_baud()));
-    require_frames(&a.capture.display().to_string(), a.device, &summary)?;
     if let Some(out) = &a.out {
-        write_log(out, &scans)?;
+        check_distinct(&[("CAPTURE", &a.capture)], &[("--out", out)])?;
+    }
+    let input = open_input(&a.capture)?;
+    let mut log = a.out.as_deref().map(OutputFile::stage).transpose()?;
+    let baud = a.baud.unwrap_or(a.device.default_baud());
+    let summary = decode_stream(a.device, input.reader, &input.name, baud, |scan| {
+        if let Some(w) = log.as_mut() {
+            write_robotlaser1(w, &scan.record, "plumbline").map_err(|e| w.error(e))?;
+        }
+        Ok::<_, CliError>(true)
+    })?;
+    require_frames(&input.name, a.device, &summary)?;
+    if let Some(w) = log {
+        w.commit()?;
     }
     let mut map = summary_json(a.device, &summary);
     map.insert("capture".into(), a.capture.display().to_string().into());

@@ -8,11 +8,8 @@ mod record;
 use crate::numeric::Range;
 use crate::report::{CliError, CliResult};
 use clap::{Args, Subcommand};
-use plumbline_io::carmen::write_robotlaser1;
-use plumbline_io::serial::{DecodeSummary, DecodedScan, Device};
+use plumbline_io::serial::{DecodeSummary, Device};
 use serde_json::{json, Map, Value};
-use std::io::Write;
-use std::path::Path;
 
 /// Line speeds a serial lidar can be run at; outside this, stamps by byte position mean nothing.
 const BAUD_RANGE: Range = Range::closed(1200.0, 4_000_000.0);
@@ -90,20 +87,4 @@ fn require_frames(what: &str, device: Device, summary: &DecodeSummary) -> CliRes
         eprintln!("plumbline: WARNING: {verdict}");
     }
     Ok(())
-}
-
-fn write_log(path: &Path, scans: &[DecodedScan]) -> CliResult {
-    let file =
-        std::fs::File::create(path).map_err(|e| CliError(format!("{}: {e}", path.display())))?;
-    let mut w = std::io::BufWriter::new(file);
-    for s in scans {
-        write_robotlaser1(&mut w, &s.record, "plumbline")
-            .map_err(|e| CliError(format!("{}: {e}", path.display())))?;
-    }
-    w.flush()
-        .map_err(|e| CliError(format!("{}: {e}", path.display())))
-}
-
-fn read_capture(path: &Path) -> Result<Vec<u8>, CliError> {
-    std::fs::read(path).map_err(|e| CliError(format!("{}: {e}", path.display())))
 }

@@ -1,12 +1,15 @@
 //! `plumbline lidar plot --device D CAPTURE [--revolution N] --out PNG`: one revolution seen
 //! from above, x forward (up the page), y left, so the picture matches the robot's view.
 
-use super::{read_capture, require_frames};
+use super::require_frames;
+use crate::plot::{stage_png, write_png};
 use crate::report::{CliError, CliResult};
 use clap::Args;
 use plotters::prelude::*;
-use plumbline_io::serial::{decode_capture, DecodedScan, Device};
-use std::path::PathBuf;
+use plumbline_io::input::open_input;
+use plumbline_io::output::check_distinct;
+use plumbline_io::serial::{decode_stream, DecodedScan, Device};
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct PlotArgs {
@@ -17,20 +20,34 @@ pub struct PlotArgs {
     /// Which revolution (0 = the first handed out; often partial).
     #[arg(long, default_value_t = 1)]
     revolution: usize,
+    /// The picture (a `.png` file).
     #[arg(long)]
     out: PathBuf,
 }
 
 pub fn run(a: PlotArgs) -> CliResult {
-    let bytes = read_capture(&a.capture)?;
-    let (scans, summary) = decode_capture(a.device, &bytes, a.device.default_baud());
-    require_frames(&a.capture.display().to_string(), a.device, &summary)?;
-    let scan = scans.get(a.revolution).ok_or_else(|| {
+    check_distinct(&[("CAPTURE", &a.capture)], &[("--out", &a.out)])?;
+    let input = open_input(&a.capture)?;
+    let out = stage_png("--out", &a.out)?;
+    let (mut seen, mut wanted) = (0, None);
+    let summary = decode_stream(
+        a.device,
+        input.reader,
+        &input.name,
+        a.device.default_baud(),
+        |scan| {
+            if seen == a.revolution {
+                wanted = Some(scan);
+            }
+            seen += 1;
+            Ok::<_, CliError>(wanted.is_none())
+        },
+    )?;
+    require_frames(&input.name, a.device, &summary)?;
+    let scan = wanted.ok_or_else(|| {
         CliError(format!(
-            "{}: revolution {} asked, {} decoded",
-            a.capture.display(),
-            a.revolution,
-            scans.len()
+            "{}: revolution {} asked, {seen} decoded",
+            input.name, a.revolution
         ))
     })?;
     let title = format!(
@@ -39,11 +56,11 @@ pub fn run(a: PlotArgs) -> CliResult {
         a.revolution,
         a.capture.display()
     );
-    draw(scan, &title, &a.out).map_err(|e| CliError(format!("{}: {e}", a.out.display())))
+    write_png(out, |path| draw(&scan, &title, path))
 }
 
 /// Valid hit points in the sensor frame, drawn as (-y, x) so forward is up and left is left.
-fn draw(scan: &DecodedScan, title: &str, out: &PathBuf) -> Result<(), Box<dyn std::error::Error>> {
+fn draw(scan: &DecodedScan, title: &str, out: &Path) -> Result<(), Box<dyn std::error::Error>> {
     let rec = &scan.record;
     let points: Vec<(f64, f64)> = (0..rec.beam_count())
         .filter(|&i| rec.valid[i])

@@ -9,11 +9,13 @@ mod world;
 
 use crate::log_args::LogArgs;
 use crate::numeric::{within, Range};
+use crate::plot::write_png;
 use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::builder::{PossibleValue, PossibleValuesParser};
 use clap::Args;
-use outputs::{Collector, SensorLogs};
-use plumbline_io::output;
+use outputs::{create, Collector, SensorLogs};
+use plumbline_io::input::read_text;
+use plumbline_io::output::{self, check_distinct};
 use plumbline_sim::disturb::Push;
 use plumbline_sim::math::Vec3;
 use plumbline_sim::runner::{SetupError, SimConfig, Status, PHYSICS_HZ_RANGE};
@@ -112,9 +114,9 @@ pub fn load_world(arg: &str) -> Result<World, CliError> {
     if arg.ends_with(".pgm") {
         return world::load_pgm(Path::new(arg));
     }
-    let text = std::fs::read_to_string(arg).map_err(|e| {
+    let text = read_text(Path::new(arg)).map_err(|e| {
         CliError(format!(
-            "{arg}: {e} (shipped worlds: room, office, building, intel)"
+            "{e} (shipped worlds: room, office, building, intel)"
         ))
     })?;
     World::parse(&text).map_err(|e| CliError(format!("{arg}: {e}")))
@@ -124,9 +126,35 @@ fn load_vehicle(arg: &str) -> Result<VehicleParams, CliError> {
     if let Some(v) = VehicleParams::preset(arg) {
         return Ok(v);
     }
-    let text = std::fs::read_to_string(arg)
-        .map_err(|e| CliError(format!("{arg}: {e} (presets: f450, pelican)")))?;
+    let text =
+        read_text(Path::new(arg)).map_err(|e| CliError(format!("{e} (presets: f450, pelican)")))?;
     VehicleParams::from_toml(&text).map_err(|e| CliError(format!("{arg}: {e}")))
+}
+
+/// Every file a flight may write into `--out DIR`.
+const OUTPUT_NAMES: &[&str] = &[
+    "scans.clf",
+    "imu.csv",
+    "sonar.csv",
+    "truth.txt",
+    "truth.relations",
+    "summary.json",
+    "top.png",
+    "flight.png",
+    "position_error.png",
+    "motors.png",
+];
+
+/// Refuses a world or vehicle file that a flight's outputs would overwrite.
+fn check_inputs_outside(args: &SimArgs, dir: &Path) -> CliResult {
+    let inputs: Vec<(&str, &Path)> = [("--world", &args.world), ("--vehicle", &args.vehicle)]
+        .into_iter()
+        .map(|(role, arg)| (role, Path::new(arg.as_str())))
+        .filter(|(_, p)| p.is_file())
+        .collect();
+    let paths: Vec<PathBuf> = OUTPUT_NAMES.iter().map(|n| dir.join(n)).collect();
+    let outputs: Vec<(&str, &Path)> = paths.iter().map(|p| ("--out", p.as_path())).collect();
+    Ok(check_distinct(&inputs, &outputs)?)
 }
 
 fn summary(args: &SimArgs, config: &SimConfig, report: &Report, wall_s: f64) -> serde_json::Value {
@@ -173,7 +201,6 @@ fn rasterize(args: &SimArgs, log_path: &Path) -> CliResult {
         .out
         .as_deref()
         .ok_or_else(|| CliError("--rasterize needs --out DIR".into()))?;
-    let log = args.log_args.read(log_path)?;
     let name = log_path
         .file_name()
         .map_or("log".into(), |s| s.to_string_lossy().into_owned());
@@ -183,6 +210,10 @@ fn rasterize(args: &SimArgs, log_path: &Path) -> CliResult {
         .unwrap_or("log")
         .trim_end_matches("-corrected")
         .to_string();
+    let paths = ["world", "pgm", "yaml"].map(|ext| dir.join(format!("{name}.{ext}")));
+    let outputs = paths.each_ref().map(|p| ("--out", p.as_path()));
+    check_distinct(&[("--rasterize", log_path)], &outputs)?;
+    let log = args.log_args.read(log_path)?;
     let (world, grid) = world::rasterize(&log, &log_path.display().to_string(), &name)?;
     world::write_world(dir, &world, &grid)?;
     let [x0, y0, x1, y1] = world.bounds();
@@ -248,7 +279,10 @@ pub fn run(args: SimArgs) -> CliResult {
     let flight = entry
         .prepare(&options, &mut config)
         .map_err(|e| scenario_error(&args, e))?;
-    // Every check has passed: from here on the run starts, so the files may be created.
+    if let Some(dir) = args.out.as_deref() {
+        check_inputs_outside(&args, dir)?;
+    }
+    // Every check has passed: from here on the run starts, so the files may be staged.
     let logs = args.out.as_deref().map(SensorLogs::create).transpose()?;
     let bar = progress(flight.planned_s.ceil() as u64, "sim");
     let mut collector = Collector {
@@ -274,15 +308,11 @@ pub fn run(args: SimArgs) -> CliResult {
     }
     if let (Some(dir), Some(logs)) = (args.out.as_deref(), collector.logs.take()) {
         let poses = logs.finish(dir)?;
-        plot::top_view(
-            &dir.join("top.png"),
-            &config.world,
-            &collector.states,
-            &poses,
-        )
-        .map_err(|e| CliError(format!("top.png: {e}")))?;
-        plot::time_series(&dir.join("flight.png"), &collector.states)
-            .map_err(|e| CliError(format!("flight.png: {e}")))?;
+        let states = &collector.states;
+        write_png(create(dir, "top.png")?, |p| {
+            plot::top_view(p, &config.world, states, &poses)
+        })?;
+        write_png(create(dir, "flight.png")?, |p| plot::time_series(p, states))?;
         let text = serde_json::to_string_pretty(&summary).map_err(|e| CliError(e.to_string()))?;
         output::write(&dir.join("summary.json"), (text + "\n").as_bytes())?;
     }

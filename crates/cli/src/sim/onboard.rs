@@ -1,7 +1,9 @@
 //! The onboard stack's side of `plumbline sim`: the options of the scenarios it flies, what it
 //! did in the summary (modes, failsafe, motor jitter, the push's score), and its plots.
 
+use super::outputs::create;
 use super::plot::{stacked_panels, Line};
+use crate::plot::write_png;
 use crate::report::CliError;
 use clap::Args;
 use plotters::prelude::*;
@@ -136,8 +138,9 @@ pub fn plots(
             ),
         ],
     )];
-    stacked_panels(&dir.join("position_error.png"), error)
-        .map_err(|e| CliError(format!("position_error.png: {e}")))?;
+    write_png(create(dir, "position_error.png")?, |p| {
+        stacked_panels(p, error)
+    })?;
     let colors = [RED, GREEN, BLUE, BLACK];
     let names = ["motor 1", "motor 2", "motor 3", "motor 4"];
     let motors: Vec<Line> = (0..4)
@@ -150,9 +153,7 @@ pub fn plots(
             (names[i], colors[i], pts)
         })
         .collect();
-    stacked_panels(
-        &dir.join("motors.png"),
-        vec![("motor commands (0..1)", motors)],
-    )
-    .map_err(|e| CliError(format!("motors.png: {e}")))
+    write_png(create(dir, "motors.png")?, |p| {
+        stacked_panels(p, vec![("motor commands (0..1)", motors)])
+    })
 }

@@ -1,21 +1,20 @@
 //! What `plumbline sim` records while it flies: the sensor logs and the ground truth, written
 //! through `plumbline-io` as the samples arrive (`scans.clf`, `imu.csv`, `sonar.csv`,
 //! `truth.txt`; `truth.relations` at the end), and the state series kept for the plots and the
-//! progress bar.
+//! progress bar. The files are staged and put in place when the flight is done, so a run that
+//! fails or is stopped leaves the files of an earlier run as they were.
 
 use crate::report::CliError;
 use indicatif::ProgressBar;
 use plumbline_core::msgs::{ImuSample, SonarSample};
 use plumbline_io::carmen::{write_robotlaser1, LaserRecord, OdomPose};
-use plumbline_io::output;
+use plumbline_io::output::OutputFile;
 use plumbline_io::relations::{write_relation_3d, Relation3d};
 use plumbline_io::sensor_csv::{write_imu, write_imu_header, write_sonar, write_sonar_header};
 use plumbline_io::trajectory::{write_trajectory, TrajectoryPoint};
 use plumbline_sim::runner::truth::relations;
 use plumbline_sim::runner::{Recorder, StateSample, TruthPose};
 use plumbline_sim::sensors::lidar::LidarScan;
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::Path;
 
 /// Relations pair scans this far apart at most, s.
@@ -23,16 +22,17 @@ const RELATION_SPAN_S: f64 = 10.0;
 
 /// The files in `--out`, open while the flight streams into them.
 pub struct SensorLogs {
-    clf: BufWriter<File>,
-    imu: BufWriter<File>,
-    sonar: BufWriter<File>,
-    truth: BufWriter<File>,
+    clf: OutputFile,
+    imu: OutputFile,
+    sonar: OutputFile,
+    truth: OutputFile,
     /// The true pose of every scan, for the relations and the top view.
     poses: Vec<TruthPose>,
 }
 
-fn create(dir: &Path, name: &str) -> Result<BufWriter<File>, CliError> {
-    output::create(&dir.join(name)).map_err(|e| CliError(e.to_string()))
+/// Stages `dir/name`; the old file stays until the flight is done.
+pub fn create(dir: &Path, name: &str) -> Result<OutputFile, CliError> {
+    Ok(OutputFile::stage(&dir.join(name))?)
 }
 
 impl SensorLogs {
@@ -52,8 +52,8 @@ impl SensorLogs {
         })
     }
 
-    /// Writes `truth.relations` and flushes every file; returns the scans' true poses.
-    pub fn finish(mut self, dir: &Path) -> Result<Vec<TruthPose>, CliError> {
+    /// Writes `truth.relations` and puts every file in place; returns the scans' true poses.
+    pub fn finish(self, dir: &Path) -> Result<Vec<TruthPose>, CliError> {
         let mut rel = create(dir, "truth.relations")?;
         for r in relations(&self.poses, RELATION_SPAN_S) {
             let t = r.translation;
@@ -65,14 +65,8 @@ impl SensorLogs {
             };
             write_relation_3d(&mut rel, &relation)?;
         }
-        for w in [
-            &mut self.clf,
-            &mut self.imu,
-            &mut self.sonar,
-            &mut self.truth,
-            &mut rel,
-        ] {
-            w.flush()?;
+        for w in [self.clf, self.imu, self.sonar, self.truth, rel] {
+            w.commit()?;
         }
         Ok(self.poses)
     }

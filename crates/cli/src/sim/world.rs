@@ -23,11 +23,8 @@ const WAYPOINT_CLEARANCE_M: f64 = 0.55;
 /// `resolution` and `origin` from a map_server YAML (the only keys the world needs).
 fn read_map_yaml(path: &Path) -> Result<(f64, [f64; 2]), CliError> {
     let name = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        CliError(format!(
-            "{name}: {e} (a PGM world needs its map_server YAML)"
-        ))
-    })?;
+    let text = plumbline_io::input::read_text(path)
+        .map_err(|e| CliError(format!("{e} (a PGM world needs its map_server YAML)")))?;
     let mut resolution = None;
     let mut origin = None;
     for line in text.lines() {

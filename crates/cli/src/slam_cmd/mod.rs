@@ -11,10 +11,11 @@ use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::Args;
 use plumbline_core::scan::Scan;
 use plumbline_io::carmen::OdomPose;
+use plumbline_io::output::check_distinct;
 use plumbline_slam::map_files::check_writable;
 use plumbline_slam::{local_map_cells, Slam, SlamConfig};
 use serde_json::json;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Args, Debug)]
@@ -31,7 +32,8 @@ pub struct SlamArgs {
     /// the path) and the pose graph as PREFIX.g2o.
     #[arg(long, value_name = "PREFIX")]
     pub map: Option<PathBuf>,
-    /// Draw every scan's points at its final pose, with the path, into this PNG.
+    /// Draw the points of evenly spaced scans at their final poses, with the path, into this
+    /// PNG (a `.png` file).
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// The simulated world the log was flown in (a shipped name or a world file): score the
@@ -53,9 +55,30 @@ pub fn run(args: SlamArgs) -> CliResult {
     let wall = Instant::now();
     // Every output is checked before the work starts: a typo in a prefix should not cost the
     // whole log.
-    if let Some(prefix) = &args.map {
-        check_writable(prefix)?;
+    let map_paths = args.map.as_deref().map(check_writable).transpose()?;
+    let g2o = args.map.as_deref().map(outputs::g2o_path);
+    let mut outputs: Vec<(&str, &Path)> = [("--out", &args.out), ("--plot", &args.plot)]
+        .into_iter()
+        .filter_map(|(role, p)| p.as_deref().map(|p| (role, p)))
+        .collect();
+    if let (Some(m), Some(g)) = (&map_paths, &g2o) {
+        outputs.extend([&m.pgm, &m.yaml, &m.png, g].map(|p| ("--map", p.as_path())));
     }
+    let world_file = args.world.as_deref().map(Path::new).filter(|p| p.is_file());
+    let inputs: Vec<(&str, &Path)> = [
+        ("LOG", Some(args.log.as_path())),
+        ("--truth", args.truth.as_deref()),
+        ("--world", world_file),
+    ]
+    .into_iter()
+    .filter_map(|(role, p)| p.map(|p| (role, p)))
+    .collect();
+    check_distinct(&inputs, &outputs)?;
+    let staged = outputs::Staged::new(
+        args.out.as_deref(),
+        args.plot.as_deref(),
+        args.map.as_deref(),
+    )?;
     let truth = args
         .world
         .as_deref()
@@ -110,7 +133,7 @@ pub fn run(args: SlamArgs) -> CliResult {
         .ok_or_else(|| CliError("the SLAM back end stopped unexpectedly".into()))?;
     let backend = &finished.backend;
     let trajectory = outputs::trajectory(&log.scans, &anchors, backend.poses());
-    let written = outputs::write(&args, &log.scans, &trajectory, backend)?;
+    let written = staged.write(args.map.as_deref(), &log.scans, &trajectory, backend)?;
     let map_error = match (&truth, &written.grid) {
         (Some(truth), Some(grid)) => truth.map_error(grid, &log.scans[0])?,
         (Some(truth), None) => truth.map_error(&outputs::grid(backend)?, &log.scans[0])?,

@@ -1,18 +1,18 @@
 //! What `plumbline slam` writes: the trajectory, the map files, the pose graph and the plot.
 
-use super::SlamArgs;
-use crate::odometry_cmd::write_file;
-use crate::plot::plot_trajectory;
+use crate::plot::{plot_trajectory, stage_png, write_png, TrajectoryPlot};
 use crate::report::CliError;
 use plumbline_core::geom::Pose2;
 use plumbline_io::carmen::{LaserRecord, OdomPose};
+use plumbline_io::output::OutputFile;
 use plumbline_io::trajectory::{write_trajectory, TrajectoryPoint};
 use plumbline_slam::backend::Backend;
 use plumbline_slam::graph::write_g2o;
 use plumbline_slam::grid::{GridConfig, OccupancyGrid, Raster};
 use plumbline_slam::map_files::write_map;
 use std::ffi::OsString;
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 /// Beams are drawn into the map up to this range, m: farther returns are the noisiest, and the
 /// map is for the rooms the vehicle flies through.
@@ -68,31 +68,68 @@ pub fn grid<const N: usize>(backend: &Backend<N>) -> Result<OccupancyGrid, CliEr
     Ok(grid)
 }
 
-pub fn write<const N: usize>(
-    args: &SlamArgs,
-    scans: &[LaserRecord],
-    trajectory: &[TrajectoryPoint],
-    backend: &Backend<N>,
-) -> Result<Written, CliError> {
-    if let Some(path) = &args.out {
-        write_file(path, |w| write_trajectory(w, trajectory))?;
+/// The files `--out`, `--plot` and the pose graph beside `--map`, staged before the work so an
+/// unwritable one is reported first; each replaces its old file only once it is complete.
+pub struct Staged {
+    trajectory: Option<OutputFile>,
+    plot: Option<OutputFile>,
+    g2o: Option<OutputFile>,
+}
+
+/// `PREFIX.g2o`, the pose graph written beside the map files.
+pub fn g2o_path(prefix: &Path) -> PathBuf {
+    let mut g2o = OsString::from(prefix.as_os_str());
+    g2o.push(".g2o");
+    PathBuf::from(g2o)
+}
+
+impl Staged {
+    pub fn new(
+        out: Option<&Path>,
+        plot: Option<&Path>,
+        map: Option<&Path>,
+    ) -> Result<Self, CliError> {
+        Ok(Self {
+            trajectory: out.map(OutputFile::stage).transpose()?,
+            plot: plot.map(|p| stage_png("--plot", p)).transpose()?,
+            g2o: map.map(|m| OutputFile::stage(&g2o_path(m))).transpose()?,
+        })
     }
-    let mut written = Written { grid: None };
-    if let Some(prefix) = &args.map {
-        let grid = grid(backend)?;
-        let raster = Raster::from_grid(&grid)
-            .map_err(|e| CliError(format!("map: {e:?}")))?
-            .ok_or_else(|| CliError("map: no keyframe put anything on the map".into()))?;
-        let path: Vec<Pose2> = trajectory.iter().map(|t| t.pose.to_f32()).collect();
-        write_map(prefix, &raster, &path)?;
-        let mut g2o = OsString::from(prefix.as_os_str());
-        g2o.push(".g2o");
-        write_file(&PathBuf::from(g2o), |w| write_g2o(backend.graph(), w))?;
-        written.grid = Some(grid);
+
+    pub fn write<const N: usize>(
+        self,
+        map: Option<&Path>,
+        scans: &[LaserRecord],
+        trajectory: &[TrajectoryPoint],
+        backend: &Backend<N>,
+    ) -> Result<Written, CliError> {
+        if let Some(mut w) = self.trajectory {
+            write_trajectory(&mut w, trajectory).map_err(|e| w.error(e))?;
+            w.commit()?;
+        }
+        let mut written = Written { grid: None };
+        if let Some(prefix) = map {
+            let grid = grid(backend)?;
+            let raster = Raster::from_grid(&grid)
+                .map_err(|e| CliError(format!("map: {e:?}")))?
+                .ok_or_else(|| CliError("map: no keyframe put anything on the map".into()))?;
+            let path: Vec<Pose2> = trajectory.iter().map(|t| t.pose.to_f32()).collect();
+            write_map(prefix, &raster, &path)?;
+            written.grid = Some(grid);
+        }
+        if let Some(mut w) = self.g2o {
+            write_g2o(backend.graph(), &mut w)
+                .and_then(|()| w.flush())
+                .map_err(|e| w.error(e))?;
+            w.commit()?;
+        }
+        if let Some(out) = self.plot {
+            let mut data = TrajectoryPlot::new();
+            for (rec, point) in scans.iter().zip(trajectory) {
+                data.add(rec, point.pose);
+            }
+            write_png(out, |p| plot_trajectory(p, &data))?;
+        }
+        Ok(written)
     }
-    if let Some(path) = &args.plot {
-        plot_trajectory(path, scans, trajectory)
-            .map_err(|e| CliError(format!("{}: {e}", path.display())))?;
-    }
-    Ok(written)
 }

@@ -5,6 +5,9 @@ mod capture;
 mod device;
 mod port;
 
-pub use capture::{decode_capture, DecodeSummary};
+pub use capture::{
+    decode_capture, decode_stream, CaptureError, DecodeSummary, SummaryTally,
+    MAX_BYTES_WITHOUT_FRAME,
+};
 pub use device::{stream_commands, DecodedScan, Device, DeviceDecoder};
-pub use port::{record, RecordError, RecordOptions, Recorded};
+pub use port::{open_port, OpenPort, RecordError, RecordOptions, RecordSink, Recorded};

@@ -1,13 +1,33 @@
 //! What makes a parsed world flyable, checked before any flight so that a bad world is an error
 //! naming its line rather than a vehicle flown into the void until it crashes or its battery
-//! dies: coordinates a building can have, one of each once-only statement, and a start (and
-//! survey waypoints) enclosed by walls.
+//! dies: known keywords (a typo is named with the keyword it likely meant), coordinates a
+//! building can have, one of each once-only statement, and a start (and survey waypoints)
+//! enclosed by walls.
 
 use super::{Segment, World, WorldError};
 
 /// Largest coordinate (and any other number) in a world file, m: 10 km from the origin is far
 /// beyond any building, and keeps every derived grid and distance well inside `f64` precision.
 pub const MAX_COORD_M: f64 = 10_000.0;
+
+/// Every statement of the world format (`WORLDS.md`).
+pub const KEYWORDS: &[&str] = &[
+    "name", "ceiling", "altitude", "start", "wall", "outline", "block", "box", "path", "person",
+];
+
+/// Names the unknown word, the closest keyword when one is a likely typo, and all of them.
+pub fn unknown_keyword(word: &str) -> String {
+    let closest = KEYWORDS
+        .iter()
+        .map(|k| (strsim::damerau_levenshtein(word, k), *k))
+        .min()
+        .filter(|(d, k)| *d <= 2 && *d < k.len());
+    let hint = closest.map_or(String::new(), |(_, k)| format!("; did you mean `{k}`?"));
+    format!(
+        "unknown keyword `{word}`{hint} (a line starts with one of: {})",
+        KEYWORDS.join(", ")
+    )
+}
 
 /// Statements that set one value and may appear once.
 const ONCE: &[&str] = &["name", "start", "ceiling", "altitude"];

@@ -15,7 +15,7 @@ pub mod occupancy;
 pub mod scene;
 
 use crate::math::Vec3;
-use check::{check_enclosed, world_number, OnceOnly};
+use check::{check_enclosed, unknown_keyword, world_number, OnceOnly, KEYWORDS};
 
 /// A wall from `a` to `b` (world x, y in metres), floor to ceiling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -148,6 +148,8 @@ impl World {
         let mut start_line = None;
         let mut path_lines = Vec::new();
         let mut once = OnceOnly::default();
+        // Editors on some systems put a byte-order mark in front of UTF-8 text; it is not a word.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let err = |reason: String| WorldError { line, reason };
@@ -158,6 +160,9 @@ impl World {
             if key == "name" {
                 w.name = words.collect::<Vec<_>>().join(" ");
                 continue;
+            }
+            if !KEYWORDS.contains(&key) {
+                return Err(err(unknown_keyword(key)));
             }
             let nums = words
                 .map(|s| world_number(s).map_err(err))
@@ -241,7 +246,7 @@ impl World {
                         speed_mps: nums[4],
                     });
                 }
-                other => return Err(err(format!("unknown keyword `{other}`"))),
+                other => return Err(err(unknown_keyword(other))),
             }
         }
         let whole = |reason: &str| WorldError {
@@ -422,6 +427,14 @@ mod tests {
             e.to_string().starts_with("line 2:") && e.reason.contains("nan"),
             "{e}"
         );
+        let e = World::parse("start 0 0 0\nnmae my room\n").unwrap_err();
+        assert_eq!(e.line, 2);
+        assert!(
+            e.reason
+                .contains("unknown keyword `nmae`; did you mean `name`?"),
+            "{e}"
+        );
+        assert!(World::parse("\u{feff}start 1 1 0\noutline 0 0 4 0 4 4 0 4\n").is_ok());
         let e = World::parse("start 0 0 0\nwindow 1 2\n").unwrap_err();
         assert!(e.reason.contains("unknown keyword `window`"), "{e}");
         assert!(World::parse("start 0 0 0\n")
