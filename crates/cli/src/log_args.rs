@@ -3,8 +3,9 @@
 use crate::numeric::{within, Range};
 use crate::report::CliError;
 use clap::Args;
+use plumbline_core::geom::Pose2;
 use plumbline_io::carmen::{
-    read_log, CarmenLog, FovRule, ReadOptions, ReadStats, FLASER_MAX_RANGE_M,
+    read_log, CarmenLog, FovRule, OdomPose, ReadOptions, ReadStats, FLASER_MAX_RANGE_M,
 };
 use std::path::Path;
 
@@ -67,4 +68,17 @@ pub fn no_scans(path: &Path) -> CliError {
         "{}: no FLASER or ROBOTLASER1 scans in the log",
         path.display()
     ))
+}
+
+/// The log's own odometry between two scans as the matcher's motion guess: only when the user
+/// asked for it and both scans carry a pose.
+pub fn odometry_prior(
+    enabled: bool,
+    previous: Option<OdomPose>,
+    current: Option<OdomPose>,
+) -> Option<Pose2> {
+    match (enabled, previous, current) {
+        (true, Some(a), Some(b)) => Some(a.between(b).to_f32()),
+        _ => None,
+    }
 }

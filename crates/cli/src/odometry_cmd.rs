@@ -3,7 +3,7 @@
 //! The log is read a scan at a time and each pose written as it is computed, so memory stays
 //! flat however long the log, and a run that is stopped keeps the trajectory so far.
 
-use crate::log_args::{no_scans, report_bad_lines, LogArgs};
+use crate::log_args::{no_scans, odometry_prior, report_bad_lines, LogArgs};
 use crate::numeric::{within, Range};
 use crate::plot::{plot_trajectory, stage_png, write_png, TrajectoryPlot};
 use crate::report::{print_summary, progress_bytes, CliError, CliResult};
@@ -158,10 +158,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
             ));
             kept_so_far(e, traj_out.take(), scans - 1)
         })?;
-        let prior = match (args.odom_prior, previous_odom, rec.odom) {
-            (true, Some(a), Some(b)) => Some(a.between(b).to_f32()),
-            _ => None,
-        };
+        let prior = odometry_prior(args.odom_prior, previous_odom, rec.odom);
         previous_odom = rec.odom;
         let start = Instant::now();
         let (step, map_use) = odometry.update(&scan, prior);

@@ -5,7 +5,7 @@
 mod outputs;
 mod truth;
 
-use crate::log_args::LogArgs;
+use crate::log_args::{odometry_prior, LogArgs};
 use crate::odometry_cmd::{percentile, MAX_BEAMS};
 use crate::report::{print_summary, progress, CliError, CliResult};
 use clap::Args;
@@ -106,10 +106,7 @@ pub fn run(args: SlamArgs) -> CliResult {
                 rec.beam_count()
             ))
         })?;
-        let prior = match (args.odom_prior, previous_odom, rec.odom) {
-            (true, Some(a), Some(b)) => Some(a.between(b).to_f32()),
-            _ => None,
-        };
+        let prior = odometry_prior(args.odom_prior, previous_odom, rec.odom);
         previous_odom = rec.odom;
         let start = Instant::now();
         let out = slam.add_scan(&scan, prior);
