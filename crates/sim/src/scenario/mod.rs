@@ -20,6 +20,7 @@
 //! here and add `NAME::ENTRY` to [`CATALOGUE`]. Scoring needs no new code unless the scenario
 //! judges something new: then it goes in [`score`], next to the rest.
 
+pub mod coverage;
 mod flight;
 pub mod hold;
 pub mod lidar_failure;
