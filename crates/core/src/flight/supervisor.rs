@@ -161,7 +161,7 @@ impl Supervisor {
                     self.set_mode(s.t_s, next);
                 }
             }
-            FlightMode::Takeoff | FlightMode::Hold => {
+            FlightMode::Takeoff | FlightMode::Hold | FlightMode::Explore | FlightMode::Return => {
                 if s.pilot.manual {
                     self.set_mode(s.t_s, FlightMode::Manual);
                 } else if self.autonomous_failsafes(s) || !s.pilot.arm {
