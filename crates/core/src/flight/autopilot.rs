@@ -180,7 +180,12 @@ impl Autopilot {
             disarmed: self.mode == FlightMode::Disarmed,
             rotors_carry: matches!(
                 self.mode,
-                FlightMode::Takeoff | FlightMode::Hold | FlightMode::Land | FlightMode::Manual
+                FlightMode::Takeoff
+                    | FlightMode::Hold
+                    | FlightMode::Explore
+                    | FlightMode::Return
+                    | FlightMode::Land
+                    | FlightMode::Manual
             ),
             lidar_lost: self.supervisor.failsafe() == Some(FailsafeReason::LidarLost),
             ground_height_m: self.config.landing.ground_height_m,
@@ -267,7 +272,7 @@ impl Autopilot {
                 self.home.position_m[2] = self.config.supervisor.takeoff_height_m;
             }
             FlightMode::Disarmed | FlightMode::Killed => self.saturated = false,
-            FlightMode::Land | FlightMode::Manual => {}
+            FlightMode::Land | FlightMode::Manual | FlightMode::Explore | FlightMode::Return => {}
         }
         self.cascade.reset();
         self.mode = mode;
@@ -283,11 +288,13 @@ impl Autopilot {
         let hold_xy = [self.home.position_m[0], self.home.position_m[1]];
         let yaw_rad = self.home.yaw_rad;
         match mode {
-            FlightMode::Takeoff | FlightMode::Hold => Some(CascadeSetpoint {
-                horizontal_m: Some(hold_xy),
-                vertical: Vertical::Height(self.home.position_m[2]),
-                yaw_rad,
-            }),
+            FlightMode::Takeoff | FlightMode::Hold | FlightMode::Explore | FlightMode::Return => {
+                Some(CascadeSetpoint {
+                    horizontal_m: Some(hold_xy),
+                    vertical: Vertical::Height(self.home.position_m[2]),
+                    yaw_rad,
+                })
+            }
             FlightMode::Land => {
                 let c = &self.config.landing;
                 let urgent = matches!(

@@ -1,0 +1,152 @@
+//! Seed 002's velocity field, eqs. 1-2: every beam adds a unit vector, turned according to its
+//! range, weighted by the inverse of its distance beyond `r_min`, and averaged over the beams.
+//!
+//! The seed's body frame is NED-like (angles clockwise); here angles are counter-clockwise
+//! (REP 103), so eq. 1 is mirrored: `γ = θ + π − (π/2)·r/r_goal` for `r ≤ 2 r_goal` and `γ = θ`
+//! beyond. A hit at `r_goal` on the right (θ = −π/2) then pushes straight ahead, a nearer hit
+//! pushes away from it and a farther one pulls toward it: right-hand wall following.
+//!
+//! Narrow gaps are flown past "with no effect on the commanded velocity" (seed 002, Fig. 5):
+//! beams through a gap narrower than `min_gap_width_m` are read as hitting the straight wall
+//! across the gap, so an opening the vehicle cannot use never pulls it in.
+
+use super::config::GuidanceConfig;
+use super::prls::{usable, WallSegments};
+use crate::geom::Vec2;
+use crate::scan::Scan;
+use core::f32::consts::{FRAC_PI_2, PI};
+use libm::{cosf, sinf};
+
+/// Which part of the field is summed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldPart {
+    /// Eq. 1 as the seed states it: wall following, attraction to open space, repulsion.
+    WallFollow,
+    /// Only the component of eq. 1 pointing away from hits nearer than `r_goal`: keeps
+    /// clearance while something else (a waypoint) sets the direction.
+    Repulsive,
+}
+
+/// The field's output for one revolution, sensor frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldSum {
+    /// `K_v / n · Σ (cos γ_i, sin γ_i) / |r_i − r_min|`, m/s (eq. 2), before any speed limit.
+    pub velocity_m_s: Vec2,
+    /// The gain used: `K_v` raised as the nearest range approaches `r_min`, m²/s.
+    pub gain_m2_s: f32,
+    /// Nearest valid range (virtual walls across narrow gaps included), m.
+    pub nearest_range_m: f32,
+    /// Beams in the average (`n` of eq. 2).
+    pub beams: usize,
+    /// Narrow gaps read as wall.
+    pub narrow_gaps: usize,
+}
+
+/// Sums the field over `scan`; `None` when no beam is usable.
+pub fn field_sum<const N: usize, const S: usize>(
+    scan: &Scan<N>,
+    walls: &WallSegments<S>,
+    cfg: &GuidanceConfig,
+    part: FieldPart,
+) -> Option<FieldSum> {
+    let mut sum = Vec2::ZERO;
+    let mut n = 0usize;
+    let mut nearest = f32::INFINITY;
+    for_each_effective_beam(scan, walls, cfg, |angle, range| {
+        let w = 1.0 / (range - cfg.r_min_m()).abs().max(cfg.weight_floor_m);
+        let (s, c) = (sinf(angle), cosf(angle));
+        let ray = Vec2::new(c, s);
+        let push = match part {
+            FieldPart::WallFollow => {
+                let gamma = increment_angle(angle, range, cfg.r_goal_m);
+                Vec2::new(cosf(gamma), sinf(gamma))
+            }
+            FieldPart::Repulsive if range < cfg.r_goal_m => {
+                ray * (-cosf(FRAC_PI_2 * range / cfg.r_goal_m))
+            }
+            FieldPart::Repulsive => Vec2::ZERO,
+        };
+        sum = sum + push * w;
+        n += 1;
+        nearest = nearest.min(range);
+    });
+    if n == 0 {
+        return None;
+    }
+    let gain = boosted_gain(nearest, cfg);
+    Some(FieldSum {
+        velocity_m_s: sum * (gain / n as f32),
+        gain_m2_s: gain,
+        nearest_range_m: nearest,
+        beams: n,
+        narrow_gaps: walls
+            .gaps()
+            .iter()
+            .filter(|g| g.width_m < cfg.min_gap_width_m)
+            .count(),
+    })
+}
+
+/// Seed 002 eq. 1 in counter-clockwise angles: the direction of one beam's increment.
+pub fn increment_angle(beam_rad: f32, range_m: f32, r_goal_m: f32) -> f32 {
+    if range_m <= 2.0 * r_goal_m {
+        beam_rad + PI - FRAC_PI_2 * range_m / r_goal_m
+    } else {
+        beam_rad
+    }
+}
+
+/// `K_v` raised linearly from 1× at `r_goal` to `(1 + boost)×` at `r_min` and nearer.
+pub fn boosted_gain(nearest_m: f32, cfg: &GuidanceConfig) -> f32 {
+    let span = cfg.r_goal_m - cfg.r_min_m();
+    let closeness = ((cfg.r_goal_m - nearest_m) / span).clamp(0.0, 1.0);
+    cfg.k_v_m2_s * (1.0 + cfg.k_v_boost * closeness)
+}
+
+/// Calls `f(angle, range)` for every usable beam, and for every beam inside a gap narrower than
+/// `min_gap_width_m` with the range to the chord across the gap where that is nearer.
+fn for_each_effective_beam<const N: usize, const S: usize>(
+    scan: &Scan<N>,
+    walls: &WallSegments<S>,
+    cfg: &GuidanceConfig,
+    mut f: impl FnMut(f32, f32),
+) {
+    let beams = scan.beams();
+    let segments = walls.segments();
+    let mut gaps = walls.gaps().iter().peekable();
+    for pos in 0..walls.sweep_len() {
+        while gaps
+            .peek()
+            .is_some_and(|g| segments[g.after + 1].first_pos <= pos)
+        {
+            gaps.next();
+        }
+        let beam = &beams[walls.beam_index(pos)];
+        let measured = if usable(beam) {
+            beam.range_m
+        } else {
+            f32::INFINITY
+        };
+        let chord = gaps
+            .peek()
+            .filter(|g| g.width_m < cfg.min_gap_width_m && segments[g.after].last_pos < pos)
+            .and_then(|g| ray_hits_chord(beam.angle_rad, g.from_m, g.to_m));
+        let range = chord.map_or(measured, |c| c.min(measured));
+        if range.is_finite() && beam.angle_rad.is_finite() {
+            f(beam.angle_rad, range);
+        }
+    }
+}
+
+/// Range along the ray at `angle_rad` from the sensor to the segment `a`-`b`, if it crosses it.
+fn ray_hits_chord(angle_rad: f32, a: Vec2, b: Vec2) -> Option<f32> {
+    let dir = Vec2::new(cosf(angle_rad), sinf(angle_rad));
+    let e = b - a;
+    let denom = dir.cross(e);
+    if denom.abs() < 1e-9 {
+        return None;
+    }
+    let t = a.cross(e) / denom;
+    let u = a.cross(dir) / denom;
+    (t > 0.0 && (-1e-3..=1.0 + 1e-3).contains(&u)).then_some(t)
+}
