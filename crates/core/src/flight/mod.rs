@@ -2,6 +2,7 @@
 
 pub mod autopilot;
 pub mod events;
+pub mod mission;
 pub mod onboard;
 pub mod supervisor;
 #[cfg(test)]

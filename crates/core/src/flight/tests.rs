@@ -310,5 +310,7 @@ fn manual_flight_is_rate_damped_and_follows_the_sticks() {
 fn autopilot_size_is_small_and_known() {
     let size = core::mem::size_of::<Autopilot>();
     std::println!("size_of::<Autopilot>() = {size} bytes");
-    assert!(size <= 4096, "{size}");
+    // About 4 KiB with the exploration mission's state (its config, the latest setpoint, the
+    // companion frame's anchor and tallies: some 150 bytes); a bound, not a target.
+    assert!(size <= 4608, "{size}");
 }
