@@ -58,16 +58,19 @@ impl Default for MissionConfig {
 /// The onboard energy model. Defaults: the simulator's F450 (3S 2200 mAh, about 130 W in
 /// hover). Remaining energy goes linearly with the loaded pack voltage between `empty_v` and
 /// `full_v`: crude on a LiPo's plateau, and a current sensor would do better, but it needs
-/// nothing the vehicle does not already measure.
+/// nothing the vehicle does not already measure. `empty_v` is the critical-battery threshold,
+/// below the low one: the energy between the two is what a return after the low-battery
+/// failsafe flies on.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EnergyConfig {
     /// Energy (Wh) the pack delivers between `full_v` and `empty_v`.
     pub usable_energy_wh: f32,
     /// Loaded pack voltage (V) of a full pack.
     pub full_v: f32,
-    /// Loaded pack voltage (V) at which the usable energy is spent: the battery-low failsafe's.
+    /// Loaded pack voltage (V) at which the usable energy is spent.
     pub empty_v: f32,
-    /// Time constant (s) of the voltage smoothing: load steps sag the voltage for a moment.
+    /// Time constant (s) of the voltage smoothing: load steps sag the voltage for a moment. Half
+    /// the battery failsafe's debounce, so the estimate has settled when the failsafe trips.
     pub voltage_smoothing_s: f32,
     /// Electrical power (W) while flying.
     pub flight_power_w: f32,
@@ -82,10 +85,10 @@ pub struct EnergyConfig {
 impl Default for EnergyConfig {
     fn default() -> Self {
         Self {
-            usable_energy_wh: 19.5,
+            usable_energy_wh: 22.0,
             full_v: 12.6,
-            empty_v: 10.5,
-            voltage_smoothing_s: 2.0,
+            empty_v: 9.9,
+            voltage_smoothing_s: 0.5,
             flight_power_w: 130.0,
             return_speed_m_s: 0.5,
             margin_fraction: 0.3,

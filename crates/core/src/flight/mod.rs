@@ -8,4 +8,6 @@ pub mod supervisor;
 #[cfg(test)]
 mod test_vehicle;
 #[cfg(test)]
+mod mission_tests;
+#[cfg(test)]
 mod tests;
