@@ -129,8 +129,7 @@ impl CompanionFrame {
             count(&mut self.counters.low_quality);
             return FixOutcome::Refused;
         }
-        // Plain comparison: a NaN age fails it and is refused.
-        if !(age_s <= c.max_latency_s) {
+        if age_s.is_nan() || age_s > c.max_latency_s {
             count(&mut self.counters.late);
             return FixOutcome::Refused;
         }
@@ -176,6 +175,12 @@ impl CompanionFrame {
     pub fn to_world(&self, p: [f32; 2]) -> [f32; 2] {
         let w = self.map_to_world.transform(Vec2::new(p[0], p[1]));
         [w.x, w.y]
+    }
+
+    /// A world point in the companion's map frame.
+    pub fn to_map(&self, p: [f32; 2]) -> [f32; 2] {
+        let m = self.map_to_world.inverse().transform(Vec2::new(p[0], p[1]));
+        [m.x, m.y]
     }
 
     /// A companion map direction (a velocity) in the world frame.

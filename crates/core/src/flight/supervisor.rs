@@ -1,12 +1,14 @@
 //! Modes and failsafes: which mode the vehicle is in and why, decided from the pilot's switches,
 //! the estimate, the scan matcher's health and the battery.
 //!
-//! disarmed -> takeoff -> hold -> land -> disarmed, with manual (stick) flight reachable from any
+//! disarmed -> takeoff -> hold -> land -> disarmed, or on a mission takeoff -> hold -> explore
+//! -> return -> land ([`super::mission`]), with manual (stick) flight reachable from any
 //! flying mode through the takeover switch and the kill switch overriding everything (seed 002
 //! sec. III). Failsafes only override the autonomous modes; a safety pilot in manual stays in
 //! charge. Every mode change and failsafe goes to the event log.
 
 use super::events::{EventKind, EventLog};
+use super::mission::{self, MissionStatus};
 use crate::msgs::{EstimatedState, FailsafeReason, FlightMode, PilotInput};
 
 /// Failsafe thresholds and mode-transition tolerances.
@@ -68,6 +70,8 @@ pub struct Status {
     pub battery_v: Option<f32>,
     /// The controller asked for far less thrust than hover on the previous step.
     pub low_thrust: bool,
+    /// The exploration mission's facts (all false without a companion).
+    pub mission: MissionStatus,
 }
 
 /// Capacity of the event log.
@@ -171,6 +175,13 @@ impl Supervisor {
                         >= self.config.takeoff_height_m - self.config.takeoff_tolerance_m
                 {
                     self.set_mode(s.t_s, FlightMode::Hold);
+                } else if let Some((next, reason)) =
+                    mission::transition(self.mode, &s.mission, self.battery_low)
+                {
+                    if let Some(reason) = reason {
+                        self.raise(s.t_s, reason);
+                    }
+                    self.set_mode(s.t_s, next);
                 }
             }
             FlightMode::Land => {
@@ -215,7 +226,9 @@ impl Supervisor {
             self.raise(s.t_s, FailsafeReason::EstimateInvalid);
             return true;
         }
-        if self.battery_low {
+        // On a mission the battery decides between the way home and landing here (`mission`).
+        let on_mission = matches!(self.mode, FlightMode::Explore | FlightMode::Return);
+        if self.battery_low && !on_mission {
             self.raise(s.t_s, FailsafeReason::BatteryLow);
             return true;
         }

@@ -46,6 +46,7 @@ impl Script {
                 scan_accepted: self.lidar && tick.is_multiple_of(20),
                 battery_v: Some(self.battery_v),
                 low_thrust: self.low_thrust,
+                mission: MissionStatus::default(),
             });
         }
         self.sup.mode()

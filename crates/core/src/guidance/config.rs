@@ -286,8 +286,10 @@ mod tests {
     fn the_error_message_says_what_to_do() {
         extern crate std;
         use std::string::ToString;
-        let mut c = GuidanceConfig::default();
-        c.min_gap_width_m = 0.5;
+        let c = GuidanceConfig {
+            min_gap_width_m: 0.5,
+            ..GuidanceConfig::default()
+        };
         let text = c.validate().unwrap_err().to_string();
         assert!(
             text.contains("min_gap_width_m") && text.contains("wider than the vehicle"),

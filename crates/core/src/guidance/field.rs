@@ -38,7 +38,7 @@ pub struct FieldSum {
     pub nearest_range_m: f32,
     /// Beams in the average (`n` of eq. 2).
     pub beams: usize,
-    /// Narrow gaps read as wall.
+    /// Narrow openings read as wall: gaps under `min_gap_width_m` that some beam looked through.
     pub narrow_gaps: usize,
 }
 
@@ -52,7 +52,7 @@ pub fn field_sum<const N: usize, const S: usize>(
     let mut sum = Vec2::ZERO;
     let mut n = 0usize;
     let mut nearest = f32::INFINITY;
-    for_each_effective_beam(scan, walls, cfg, |angle, range| {
+    let narrow_gaps = for_each_effective_beam(scan, walls, cfg, |angle, range| {
         let w = 1.0 / (range - cfg.r_min_m()).abs().max(cfg.weight_floor_m);
         let (s, c) = (sinf(angle), cosf(angle));
         let ray = Vec2::new(c, s);
@@ -79,11 +79,7 @@ pub fn field_sum<const N: usize, const S: usize>(
         gain_m2_s: gain,
         nearest_range_m: nearest,
         beams: n,
-        narrow_gaps: walls
-            .gaps()
-            .iter()
-            .filter(|g| g.width_m < cfg.min_gap_width_m)
-            .count(),
+        narrow_gaps,
     })
 }
 
@@ -105,37 +101,42 @@ pub fn boosted_gain(nearest_m: f32, cfg: &GuidanceConfig) -> f32 {
 
 /// Calls `f(angle, range)` for every usable beam, and for every beam inside a gap narrower than
 /// `min_gap_width_m` with the range to the chord across the gap where that is nearer.
+/// Returns how many narrow gaps shortened at least one beam (openings flown past).
 fn for_each_effective_beam<const N: usize, const S: usize>(
     scan: &Scan<N>,
     walls: &WallSegments<S>,
     cfg: &GuidanceConfig,
     mut f: impl FnMut(f32, f32),
-) {
+) -> usize {
     let beams = scan.beams();
-    let segments = walls.segments();
-    let mut gaps = walls.gaps().iter().peekable();
+    let narrow = || {
+        walls
+            .gaps()
+            .iter()
+            .filter(|g| g.width_m < cfg.min_gap_width_m)
+    };
+    let mut used = [false; S];
     for pos in 0..walls.sweep_len() {
-        while gaps
-            .peek()
-            .is_some_and(|g| segments[g.after + 1].first_pos <= pos)
-        {
-            gaps.next();
-        }
         let beam = &beams[walls.beam_index(pos)];
-        let measured = if usable(beam) {
+        let mut range = if usable(beam) {
             beam.range_m
         } else {
             f32::INFINITY
         };
-        let chord = gaps
-            .peek()
-            .filter(|g| g.width_m < cfg.min_gap_width_m && segments[g.after].last_pos < pos)
-            .and_then(|g| ray_hits_chord(beam.angle_rad, g.from_m, g.to_m));
-        let range = chord.map_or(measured, |c| c.min(measured));
+        for g in narrow().filter(|g| g.narrowest_pos[0] < pos && pos < g.narrowest_pos[1]) {
+            let [a, b] = g.narrowest_m;
+            if let Some(chord) = ray_hits_chord(beam.angle_rad, a, b) {
+                if chord < range - cfg.line_tolerance_m {
+                    used[g.after] = true;
+                }
+                range = range.min(chord);
+            }
+        }
         if range.is_finite() && beam.angle_rad.is_finite() {
             f(beam.angle_rad, range);
         }
     }
+    used.iter().filter(|&&u| u).count()
 }
 
 /// Range along the ray at `angle_rad` from the sensor to the segment `a`-`b`, if it crosses it.

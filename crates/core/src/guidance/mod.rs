@@ -8,6 +8,7 @@
 
 pub mod config;
 pub mod field;
+pub mod gaps;
 pub mod guard;
 pub mod heading;
 pub mod prls;

@@ -13,6 +13,8 @@
 //! first `S` in sweep order and sets [`WallSegments::truncated`].
 
 use super::config::GuidanceConfig;
+use super::gaps::measure_gaps;
+pub use super::gaps::Gap;
 use crate::geom::Vec2;
 use crate::scan::{Beam, Scan};
 use core::f32::consts::TAU;
@@ -49,19 +51,6 @@ impl WallSegment {
         let d = self.end_m - self.start_m;
         atan2f(d.y, d.x)
     }
-}
-
-/// The opening between segment `after` and segment `after + 1`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Gap {
-    /// Index of the segment before the gap; the one after is `after + 1`.
-    pub after: usize,
-    /// Last hit of the segment before and first hit of the one after, sensor frame, m.
-    pub from_m: Vec2,
-    pub to_m: Vec2,
-    /// Free width across the gap, m: the shortest distance from either side of the opening
-    /// to any hit on the other side of it (so a person standing in a door narrows the door).
-    pub width_m: f32,
 }
 
 /// Segments and gaps of one revolution, at most `S` segments, stored inline.
@@ -126,36 +115,87 @@ impl<const S: usize> WallSegments<S> {
         for pos in 0..beams.len() {
             let beam = &beams[self.beam_index(pos)];
             if !usable(beam) {
-                self.close(&mut run, cfg);
+                self.close(&mut run, beams, cfg);
                 prev = None;
                 continue;
             }
             let p = beam.point();
             let rel = relative_angle(beam.angle_rad, cfg.rule_start_rad);
-            let breaks = match prev {
-                None => false,
-                Some((q, prev_rel)) => {
-                    let step = rel - prev_rel;
-                    step <= 0.0
-                        || step > cfg.max_beam_step_rad
-                        || (p - q).norm() > cfg.max_point_spacing_m
-                        || run.off_line(p, cfg)
-                }
+            let step_ok = prev.is_some_and(|(_, prev_rel)| {
+                let step = rel - prev_rel;
+                step > 0.0 && step <= cfg.max_beam_step_rad
+            });
+            let far_from_prev = prev.is_some_and(|(q, _)| (p - q).norm() > cfg.max_point_spacing_m);
+            // A wall seen at a grazing angle has hits far apart but on one line, with no beam
+            // passing between them: an established line bridges the spacing.
+            let breaks = if prev.is_none() {
+                false
+            } else if !step_ok {
+                true
+            } else if run.established(cfg) {
+                run.off_line(p, cfg)
+            } else {
+                far_from_prev || run.off_line(p, cfg)
             };
+            if breaks && step_ok && run.off_line(p, cfg) {
+                // The hits just past a corner can lie within tolerance of the old wall; they
+                // are handed to the new wall while they sit clearly off the old one without them.
+                let mut handed = 0;
+                while handed < MAX_HANDED_BACK && run.n >= 3 {
+                    let previous = self.hit(beams, run.last_pos - 1);
+                    match run.split_last(previous) {
+                        (before, Some(q)) if before.is_outlier(q, cfg) => {
+                            run = before;
+                            handed += 1;
+                        }
+                        _ => break,
+                    }
+                }
+                if handed > 0 {
+                    let first_new = run.last_pos + 1;
+                    self.close(&mut run, beams, cfg);
+                    for k in first_new..pos {
+                        run.push(self.hit(beams, k), k);
+                    }
+                    run.push(p, pos);
+                    prev = Some((p, rel));
+                    continue;
+                }
+            }
             if breaks {
-                self.close(&mut run, cfg);
+                self.close(&mut run, beams, cfg);
             }
             run.push(p, pos);
             prev = Some((p, rel));
         }
-        self.close(&mut run, cfg);
+        self.close(&mut run, beams, cfg);
         self.measure_gaps(scan);
     }
 
     /// Ends the running fit, keeping it as a segment if it is long and populated enough.
-    fn close(&mut self, run: &mut Run, cfg: &GuidanceConfig) {
-        let done = core::mem::take(run);
-        let Some(seg) = done.segment() else { return };
+    fn close(&mut self, run: &mut Run, beams: &[Beam], cfg: &GuidanceConfig) {
+        let mut done = core::mem::take(run);
+        if done.n == 0 {
+            return;
+        }
+        self.extend_backward(&mut done, beams, cfg);
+        let hit = |pos: usize| self.hit(beams, pos);
+        if done.n >= 4 {
+            done.trim_front(hit(done.first_pos + 1), cfg);
+        }
+        let Some(mut seg) = done.segment() else {
+            return;
+        };
+        // The fit quality from the hits themselves: the running sums lose the few millimetres
+        // of residual to rounding on segments many metres long.
+        let normal = Vec2::new(cosf(seg.normal_rad), sinf(seg.normal_rad));
+        let squares: f32 = (seg.first_pos..=seg.last_pos)
+            .map(|pos| {
+                let d = hit(pos).dot(normal) - seg.distance_m;
+                d * d
+            })
+            .sum();
+        seg.rms_residual_m = sqrtf(squares / seg.points as f32);
         if seg.points < usize::from(cfg.min_segment_points)
             || seg.length_m() < cfg.min_segment_length_m
         {
@@ -170,6 +210,40 @@ impl<const S: usize> WallSegments<S> {
         }
     }
 
+    /// The hit at sweep position `pos` (only called for positions inside a run, all usable).
+    fn hit(&self, beams: &[Beam], pos: usize) -> Vec2 {
+        beams[self.beam_index(pos)].point()
+    }
+
+    /// A run starts where its hits come close enough together; the hits before that, far apart
+    /// on a wall seen at a grazing angle, join it when they lie on its line, so the wall's
+    /// far end is not mistaken for clutter narrowing the opening beyond it.
+    fn extend_backward(&self, run: &mut Run, beams: &[Beam], cfg: &GuidanceConfig) {
+        if !run.established(cfg) {
+            return;
+        }
+        let floor = self.segments().last().map_or(0, |s| s.last_pos + 1);
+        let mut next_rel = relative_angle(
+            beams[self.beam_index(run.first_pos)].angle_rad,
+            cfg.rule_start_rad,
+        );
+        while run.first_pos > floor {
+            let pos = run.first_pos - 1;
+            let b = &beams[self.beam_index(pos)];
+            let rel = relative_angle(b.angle_rad, cfg.rule_start_rad);
+            let step = next_rel - rel;
+            if !usable(b)
+                || step <= 0.0
+                || step > cfg.max_beam_step_rad
+                || run.off_line(b.point(), cfg)
+            {
+                break;
+            }
+            run.prepend(b.point(), pos);
+            next_rel = rel;
+        }
+    }
+
     fn measure_gaps<const N: usize>(&mut self, scan: &Scan<N>) {
         let beams = scan.beams();
         let (start, len) = (self.sweep_start, self.beams);
@@ -177,29 +251,13 @@ impl<const S: usize> WallSegments<S> {
             let b = &beams[(start + pos) % len];
             usable(b).then(|| b.point())
         };
-        for k in 0..self.len.saturating_sub(1) {
-            let (a, b) = (self.segments[k], self.segments[k + 1]);
-            let from = hit(a.last_pos).unwrap_or(a.end_m);
-            let to = hit(b.first_pos).unwrap_or(b.start_m);
-            let nearest = |p: Vec2, range: core::ops::Range<usize>| {
-                range
-                    .filter_map(hit)
-                    .map(|q| (q - p).norm())
-                    .fold(f32::INFINITY, f32::min)
-            };
-            let width = (to - from)
-                .norm()
-                .min(nearest(from, a.last_pos + 1..len))
-                .min(nearest(to, 0..b.first_pos));
-            self.gaps[k] = Gap {
-                after: k,
-                from_m: from,
-                to_m: to,
-                width_m: width,
-            };
-        }
+        let n = self.len.saturating_sub(1);
+        measure_gaps(&self.segments[..self.len], &mut self.gaps[..n], len, hit);
     }
 }
+
+/// Most hits past a corner handed from the old wall to the new one.
+const MAX_HANDED_BACK: usize = 3;
 
 /// A beam whose hit can be used: flagged valid and with a finite positive range and angle.
 pub(crate) fn usable(b: &Beam) -> bool {
@@ -239,6 +297,7 @@ fn sweep_start(beams: &[Beam], start_rad: f32) -> usize {
 #[derive(Clone, Copy, Debug, Default)]
 struct Run {
     origin: Vec2,
+    first: Vec2,
     last: Vec2,
     first_pos: usize,
     last_pos: usize,
@@ -250,28 +309,77 @@ struct Run {
     syy: f32,
 }
 
-/// A total least squares line: centroid, unit normal and RMS residual.
+/// A total least squares line: centroid and unit normal.
 struct Line {
     centroid: Vec2,
     normal: Vec2,
-    rms_m: f32,
 }
 
 impl Run {
     fn push(&mut self, p: Vec2, pos: usize) {
         if self.n == 0 {
             self.origin = p;
+            self.first = p;
             self.first_pos = pos;
         }
-        let d = p - self.origin;
-        self.n += 1;
-        self.sx += d.x;
-        self.sy += d.y;
-        self.sxx += d.x * d.x;
-        self.sxy += d.x * d.y;
-        self.syy += d.y * d.y;
+        self.add(p, 1.0);
         self.last = p;
         self.last_pos = pos;
+    }
+
+    /// Drops the first hit when it is an outlier to the line of the others (the last hit of the
+    /// wall before a corner, taken before the line could judge it); `second` is the next hit.
+    /// Runs of four hits or more only.
+    fn trim_front(&mut self, second: Vec2, cfg: &GuidanceConfig) {
+        let mut rest = *self;
+        rest.add(self.first, -1.0);
+        if rest.is_outlier(self.first, cfg) {
+            rest.first = second;
+            rest.first_pos = self.first_pos + 1;
+            *self = rest;
+        }
+    }
+
+    /// Adds a hit before the first one.
+    fn prepend(&mut self, p: Vec2, pos: usize) {
+        self.add(p, 1.0);
+        self.first = p;
+        self.first_pos = pos;
+    }
+
+    /// Adds (`sign` 1) or removes (`sign` -1) one hit's share of the sums: the recursion.
+    fn add(&mut self, p: Vec2, sign: f32) {
+        let d = p - self.origin;
+        if sign > 0.0 {
+            self.n += 1;
+        } else {
+            self.n -= 1;
+        }
+        self.sx += sign * d.x;
+        self.sy += sign * d.y;
+        self.sxx += sign * d.x * d.x;
+        self.sxy += sign * d.x * d.y;
+        self.syy += sign * d.y * d.y;
+    }
+
+    /// The run without its last hit, and that hit (none for runs of fewer than three hits,
+    /// whose remainder would not be a line); `previous` is the hit before the last.
+    fn split_last(&self, previous: Vec2) -> (Run, Option<Vec2>) {
+        if self.n < 3 {
+            return (*self, None);
+        }
+        let mut before = *self;
+        before.add(self.last, -1.0);
+        before.last = previous;
+        before.last_pos = self.last_pos - 1;
+        (before, Some(self.last))
+    }
+
+    /// True once the run is long enough for its line to judge new hits: a line through a few
+    /// close, noisy hits points anywhere.
+    fn established(&self, cfg: &GuidanceConfig) -> bool {
+        let base = cfg.min_segment_length_m.max(4.0 * cfg.line_tolerance_m);
+        (self.last - self.first).norm() >= base
     }
 
     fn line(&self) -> Option<Line> {
@@ -284,27 +392,46 @@ impl Run {
         let cyy = self.syy / n - my * my;
         let cxy = self.sxy / n - mx * my;
         // The line runs along the principal axis of the hits' scatter; its normal is the
-        // direction of least spread, whose variance is the mean squared residual.
+        // direction of least spread.
         let dir = 0.5 * atan2f(2.0 * cxy, cxx - cyy);
-        let normal = Vec2::new(-sinf(dir), cosf(dir));
-        let half = 0.5 * (cxx - cyy);
-        let least = 0.5 * (cxx + cyy) - sqrtf(half * half + cxy * cxy);
         Some(Line {
             centroid: self.origin + Vec2::new(mx, my),
-            normal,
-            rms_m: sqrtf(least.max(0.0)),
+            normal: Vec2::new(-sinf(dir), cosf(dir)),
         })
     }
 
-    /// True when `p` lies farther from the line fitted so far than the tolerance. Short runs are
-    /// not judged: a line through a few close, noisy hits points anywhere.
+    /// True when `p` lies farther from the line fitted so far than the tolerance.
     fn off_line(&self, p: Vec2, cfg: &GuidanceConfig) -> bool {
-        let base = cfg.min_segment_length_m.max(4.0 * cfg.line_tolerance_m);
-        if (self.last - self.origin).norm() < base {
+        self.off_line_by(p, cfg.line_tolerance_m)
+    }
+
+    /// True when `p` sits off the line by more than three times the run's own scatter (at
+    /// least a tenth of the tolerance): a hit of the next wall that the tolerance let in.
+    fn is_outlier(&self, p: Vec2, cfg: &GuidanceConfig) -> bool {
+        let Some(scatter) = self.scatter_m() else {
             return false;
+        };
+        self.off_line_by(p, (3.0 * scatter).max(0.1 * cfg.line_tolerance_m))
+    }
+
+    /// RMS distance of the run's hits from its line, from the running sums, m.
+    fn scatter_m(&self) -> Option<f32> {
+        if self.n < 3 {
+            return None;
         }
+        let n = self.n as f32;
+        let (mx, my) = (self.sx / n, self.sy / n);
+        let cxx = self.sxx / n - mx * mx;
+        let cyy = self.syy / n - my * my;
+        let cxy = self.sxy / n - mx * my;
+        let half = 0.5 * (cxx - cyy);
+        let least = 0.5 * (cxx + cyy) - sqrtf(half * half + cxy * cxy);
+        Some(sqrtf(least.max(0.0)))
+    }
+
+    fn off_line_by(&self, p: Vec2, tolerance_m: f32) -> bool {
         self.line()
-            .is_some_and(|l| (p - l.centroid).dot(l.normal).abs() > cfg.line_tolerance_m)
+            .is_some_and(|l| (p - l.centroid).dot(l.normal).abs() > tolerance_m)
     }
 
     fn segment(&self) -> Option<WallSegment> {
@@ -317,11 +444,11 @@ impl Run {
         }
         let project = |p: Vec2| p - normal * (p.dot(normal) - rho);
         Some(WallSegment {
-            start_m: project(self.origin),
+            start_m: project(self.first),
             end_m: project(self.last),
             normal_rad: atan2f(normal.y, normal.x),
             distance_m: rho,
-            rms_residual_m: l.rms_m,
+            rms_residual_m: 0.0,
             points: self.n,
             first_pos: self.first_pos,
             last_pos: self.last_pos,

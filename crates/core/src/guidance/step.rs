@@ -194,8 +194,11 @@ fn centred_velocity(sides: &SideClearance, choice: &HeadingChoice, cfg: &Guidanc
         n if n == Vec2::ZERO => Vec2::new(0.0, 1.0),
         n => n,
     };
-    let lateral = across * (cfg.centring_gain_1_s * 0.5 * (left - right));
-    along * cfg.cruise_speed_m_s + lateral
+    // Centring comes first; the speed left under the limit goes along the passage.
+    let lateral_m_s =
+        (cfg.centring_gain_1_s * 0.5 * (left - right)).clamp(-cfg.max_speed_m_s, cfg.max_speed_m_s);
+    let spare = libm::sqrtf(cfg.max_speed_m_s * cfg.max_speed_m_s - lateral_m_s * lateral_m_s);
+    along * cfg.cruise_speed_m_s.min(spare) + across * lateral_m_s
 }
 
 /// Toward a waypoint: attraction capped at the cruise speed plus the field's repulsive part.

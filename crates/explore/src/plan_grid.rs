@@ -1,0 +1,217 @@
+//! The grid planners search: the live map in coarser cells, with every obstacle grown by
+//! `r_min` so that a path of cell centres keeps the vehicle clear.
+//!
+//! A planning cell is occupied if any of its map cells is, else free if any is, else unknown:
+//! obstacles are never thinned away by the coarser cells, and the single unknown cells that
+//! fall between far beams do not break up free space. A free cell is *safe* when no occupied
+//! cell's square comes within `r_min` of its centre; measuring to the square rather than the
+//! centre means the grid can only make a gap look narrower than it is, never wider, so a gap
+//! narrower than `2 r_min` never has a safe cell in it.
+
+use plumbline_core::geom::Vec2;
+use plumbline_slam::grid::{Cell, CellState, OccupancyGrid};
+
+pub struct PlanGrid {
+    /// Planning-cell index of column 0, row 0.
+    origin: Cell,
+    width: usize,
+    height: usize,
+    cell_m: f32,
+    states: Vec<CellState>,
+    safe: Vec<bool>,
+    free_cells: usize,
+}
+
+impl PlanGrid {
+    /// The planning grid of `grid` with cells of `factor` map cells a side, one unknown cell
+    /// of border all round (so the map's edge is a frontier), and obstacles grown by `r_min_m`.
+    pub fn new(grid: &OccupancyGrid, factor: i32, r_min_m: f32) -> Self {
+        let cell_m = grid.frame().resolution_m() * factor as f32;
+        let Some(bounds) = grid.bounds() else {
+            return Self::unknown(cell_m);
+        };
+        let coarse = |c: Cell| Cell::new(c.i.div_euclid(factor), c.j.div_euclid(factor));
+        let (lo, hi) = (coarse(bounds.min), coarse(bounds.max));
+        let origin = Cell::new(lo.i - 1, lo.j - 1);
+        let width = (hi.i - lo.i + 3) as usize;
+        let height = (hi.j - lo.j + 3) as usize;
+        let mut states = vec![CellState::Unknown; width * height];
+        for j in bounds.min.j..=bounds.max.j {
+            for i in bounds.min.i..=bounds.max.i {
+                let c = coarse(Cell::new(i, j));
+                let k = (c.j - origin.j) as usize * width + (c.i - origin.i) as usize;
+                states[k] = merge(states[k], grid.state(Cell::new(i, j)));
+            }
+        }
+        let mut plan = Self::from_states(origin, width, height, cell_m, states)
+            .unwrap_or_else(|| Self::unknown(cell_m));
+        plan.inflate(r_min_m);
+        plan
+    }
+
+    /// One unknown cell: the plan of an empty map.
+    fn unknown(cell_m: f32) -> Self {
+        Self {
+            origin: Cell::new(0, 0),
+            width: 1,
+            height: 1,
+            cell_m,
+            states: vec![CellState::Unknown],
+            safe: vec![false],
+            free_cells: 0,
+        }
+    }
+
+    /// A planning grid from cell states given row by row (row 0 at the bottom), with no
+    /// obstacle growth yet; `origin` is the planning-cell index of the first cell. `None`
+    /// unless there is one state per cell and the cell size is finite and positive.
+    pub fn from_states(
+        origin: Cell,
+        width: usize,
+        height: usize,
+        cell_m: f32,
+        states: Vec<CellState>,
+    ) -> Option<Self> {
+        if states.len() != width.checked_mul(height)? || !(cell_m.is_finite() && cell_m > 0.0) {
+            return None;
+        }
+        let safe: Vec<bool> = states.iter().map(|&s| s == CellState::Free).collect();
+        let free_cells = safe.iter().filter(|&&s| s).count();
+        Some(Self {
+            origin,
+            width,
+            height,
+            cell_m,
+            states,
+            safe,
+            free_cells,
+        })
+    }
+
+    /// Marks unsafe every free cell whose centre lies within `r_min_m` of an occupied cell's
+    /// square.
+    pub fn inflate(&mut self, r_min_m: f32) {
+        let reach = (r_min_m / self.cell_m).ceil() as i32 + 1;
+        let mut offsets = Vec::new();
+        for dj in -reach..=reach {
+            for di in -reach..=reach {
+                let gap = |d: i32| ((d.abs() as f32) - 0.5).max(0.0) * self.cell_m;
+                if gap(di).hypot(gap(dj)) < r_min_m {
+                    offsets.push((di, dj));
+                }
+            }
+        }
+        for k in 0..self.states.len() {
+            if self.states[k] != CellState::Occupied {
+                continue;
+            }
+            let (i, j) = self.coords(k);
+            for &(di, dj) in &offsets {
+                if let Some(n) = self.index(i + di, j + dj) {
+                    self.safe[n] = false;
+                }
+            }
+        }
+    }
+
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    pub fn len(&self) -> usize {
+        self.states.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.states.is_empty()
+    }
+
+    pub fn cell_m(&self) -> f32 {
+        self.cell_m
+    }
+
+    pub fn state(&self, k: usize) -> CellState {
+        self.states[k]
+    }
+
+    /// Free and at least `r_min` from every mapped obstacle.
+    pub fn is_safe(&self, k: usize) -> bool {
+        self.safe[k]
+    }
+
+    /// Known free area, m².
+    pub fn free_area_m2(&self) -> f32 {
+        self.free_cells as f32 * self.cell_m * self.cell_m
+    }
+
+    /// Column and row of cell `k` in this grid.
+    pub fn coords(&self, k: usize) -> (i32, i32) {
+        ((k % self.width) as i32, (k / self.width) as i32)
+    }
+
+    /// The index of column `i`, row `j`, if inside.
+    pub fn index(&self, i: i32, j: i32) -> Option<usize> {
+        (i >= 0 && j >= 0 && (i as usize) < self.width && (j as usize) < self.height)
+            .then(|| j as usize * self.width + i as usize)
+    }
+
+    /// The cell holding a map-frame point, if inside.
+    pub fn index_of(&self, p: Vec2) -> Option<usize> {
+        if !p.is_finite() {
+            return None;
+        }
+        let i = (p.x / self.cell_m).floor() as i64 - i64::from(self.origin.i);
+        let j = (p.y / self.cell_m).floor() as i64 - i64::from(self.origin.j);
+        let fits = |v: i64| i32::try_from(v).ok();
+        self.index(fits(i)?, fits(j)?)
+    }
+
+    /// The centre of cell `k`, map frame, m.
+    pub fn center(&self, k: usize) -> Vec2 {
+        let (i, j) = self.coords(k);
+        Vec2::new(
+            ((i + self.origin.i) as f32 + 0.5) * self.cell_m,
+            ((j + self.origin.j) as f32 + 0.5) * self.cell_m,
+        )
+    }
+
+    /// Whether every point of the segment lies in a cell that passes `ok` (sampled every
+    /// quarter cell: a path may clip the corner of a cell by less than that, which the
+    /// clearance of safe cells absorbs).
+    pub fn segment_clear(&self, a: Vec2, b: Vec2, ok: impl Fn(usize) -> bool) -> bool {
+        let steps = ((b - a).norm() / (0.25 * self.cell_m)).ceil() as usize;
+        (0..=steps).all(|s| {
+            let t = if steps == 0 {
+                0.0
+            } else {
+                s as f32 / steps as f32
+            };
+            self.index_of(a + (b - a) * t).is_some_and(&ok)
+        })
+    }
+}
+
+/// A planning cell's state so far merged with one more map cell's.
+fn merge(a: CellState, b: CellState) -> CellState {
+    match (a, b) {
+        (CellState::Occupied, _) | (_, CellState::Occupied) => CellState::Occupied,
+        (CellState::Free, _) | (_, CellState::Free) => CellState::Free,
+        _ => CellState::Unknown,
+    }
+}
+
+/// The planning-cell state of a block of map cells (used to check one cell without building
+/// the whole grid).
+pub fn block_state(grid: &OccupancyGrid, corner: Cell, factor: i32) -> CellState {
+    let mut s = CellState::Unknown;
+    for j in 0..factor {
+        for i in 0..factor {
+            s = merge(s, grid.state(Cell::new(corner.i + i, corner.j + j)));
+        }
+    }
+    s
+}
