@@ -2,6 +2,7 @@
 //! ground truth in the benchmark formats (DESIGN.md §4, §5). The scenarios and their scoring are
 //! `plumbline-sim`'s; this command parses, writes files, plots and prints.
 
+mod explore;
 mod onboard;
 mod outputs;
 mod plot;
@@ -143,6 +144,8 @@ const OUTPUT_NAMES: &[&str] = &[
     "flight.png",
     "position_error.png",
     "motors.png",
+    "map.png",
+    "explored.png",
 ];
 
 /// Refuses a world or vehicle file that a flight's outputs would overwrite.
@@ -304,6 +307,12 @@ pub fn run(args: SimArgs) -> CliResult {
         onboard::extend_summary(&mut summary, &args.closed_loop, &config, log, score);
         if let Some(dir) = args.out.as_deref() {
             onboard::plots(dir, &config, log, &collector.states)?;
+        }
+    }
+    if let (Some(score), Some(exploration)) = (&report.score.explore, &report.exploration) {
+        explore::extend_summary(&mut summary, score, exploration);
+        if let Some(dir) = args.out.as_deref() {
+            explore::plots(dir, &config, exploration, &collector.states)?;
         }
     }
     if let (Some(dir), Some(logs)) = (args.out.as_deref(), collector.logs.take()) {
