@@ -13,7 +13,7 @@ use super::onboard_link::{
     CompanionComputer, FlightLog, OnboardLink, WithCompanion, LARGE_SCAN_BEAMS, XV11_BEAMS,
 };
 use super::{Pilot, SetupError};
-use plumbline_core::geom::{Pose2, Vec2};
+use plumbline_core::geom::{normalize_angle, Pose2, Vec2};
 use plumbline_core::guidance::config::GuidanceConfig;
 use plumbline_core::guidance::step::{Guidance, GuidanceMode};
 use plumbline_core::msgs::{
@@ -40,10 +40,13 @@ const RETURN_RESERVE_S: f64 = 30.0;
 const HOME_APPROACH_M: f32 = 0.5;
 /// Lookahead along the path home, m.
 const HOME_LOOKAHEAD_M: f32 = 1.0;
+/// Fastest turn the companion asks for, rad/s: the scan matcher on board loses a slow lidar
+/// when the heading sweeps much faster (0.5 rad/s is 3 degrees a URG-04LX revolution).
+const YAW_RATE_RAD_S: f32 = 0.5;
 /// One-sigma uncertainty sent with each SLAM pose: the SLAM reports none, and these are its
 /// measured errors on the simulated surveys (a few centimetres, about half a degree).
-const FIX_STD_M: f32 = 0.05;
-const FIX_STD_RAD: f32 = 0.01;
+const FIX_STD_M: f32 = 0.1;
+const FIX_STD_RAD: f32 = 0.03;
 /// Quality of a matched pose and of a predicted one (the autopilot refuses below 20).
 const QUALITY_MATCHED: u8 = 80;
 const QUALITY_PREDICTED: u8 = 10;
@@ -113,12 +116,16 @@ pub struct ExploreCompanion<'m, const N: usize> {
     explorer: Rc<RefCell<Explorer>>,
     guidance: Guidance<WALL_SEGMENTS>,
     strategy: Strategy,
+    /// Whether the vehicle turns to the guidance's heading (a lidar with a blind sector).
+    turns: bool,
     /// The flight must be back on the ground by then, s.
     end_s: f64,
     phase: Phase,
     /// The way home and when it was planned.
     home_path: Option<(f64, Option<Path>)>,
     last: Option<ScanPose>,
+    /// Time of the previous revolution, s.
+    last_t_s: Option<f64>,
     reset_counter: u8,
     log: Rc<RefCell<CompanionLog>>,
 }
@@ -131,6 +138,7 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
         explorer: Rc<RefCell<Explorer>>,
         guidance: GuidanceConfig,
         strategy: Strategy,
+        turns: bool,
         end_s: f64,
         log: Rc<RefCell<CompanionLog>>,
     ) -> Result<Self, String> {
@@ -140,10 +148,12 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
             explorer,
             guidance,
             strategy,
+            turns,
             end_s,
             phase: Phase::Waiting,
             home_path: None,
             last: None,
+            last_t_s: None,
             reset_counter: 0,
             log,
         })
@@ -201,11 +211,19 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
         mode: GuidanceMode,
     ) -> CompanionSetpoint {
         let cmd = self.guidance.step(scan, pose, mode);
+        // The heading turns toward the guidance's at most at YAW_RATE_RAD_S, and not at all
+        // with a lidar that sees all round: the field is flown in the world frame, so turning
+        // would buy nothing and cost the scan matcher accuracy.
+        let dt = self.last_t_s.map_or(0.0, |t| (t_s - t) as f32).clamp(0.0, 1.0);
+        let step = if self.turns { YAW_RATE_RAD_S * dt } else { 0.0 };
+        let turn = cmd
+            .yaw_rad
+            .map_or(0.0, |y| normalize_angle(y - pose.theta).clamp(-step, step));
         CompanionSetpoint {
             t_s,
             target: SetpointTarget::Velocity {
                 velocity_m_s: cmd.velocity_world_m_s,
-                yaw_rad: cmd.yaw_rad.unwrap_or(pose.theta),
+                yaw_rad: normalize_angle(pose.theta + turn),
             },
         }
     }
@@ -312,6 +330,7 @@ impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
             Phase::Returning => self.go_home(t_s, scan, at.pose, &mut msgs),
             Phase::Waiting | Phase::Finished => {}
         }
+        self.last_t_s = Some(t_s);
         msgs
     }
 }
@@ -331,6 +350,9 @@ pub struct CompanionParts {
     pub explorer: Rc<RefCell<Explorer>>,
     pub guidance: GuidanceConfig,
     pub strategy: Strategy,
+    /// Whether the vehicle turns to the guidance's heading: only a lidar with a blind sector
+    /// needs to face where it goes.
+    pub turns: bool,
     /// The flight must be back on the ground by then, s.
     pub end_s: f64,
     pub log: Rc<RefCell<CompanionLog>>,
@@ -353,6 +375,7 @@ impl<const N: usize> ExploreCrew<N> {
             parts.explorer,
             parts.guidance,
             parts.strategy,
+            parts.turns,
             parts.end_s,
             parts.log,
         )

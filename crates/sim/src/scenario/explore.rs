@@ -54,6 +54,8 @@ fn prepare(options: &Options, config: &mut SimConfig) -> Result<Flight, Scenario
         explorer: explorer.clone(),
         guidance,
         strategy: options.strategy,
+        turns: config.lidar.beams as f64 * config.lidar.increment_rad.abs()
+            < std::f64::consts::TAU - 1e-6,
         end_s: config.max_duration_s,
         log: companion.clone(),
     };
