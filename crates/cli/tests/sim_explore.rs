@@ -84,5 +84,8 @@ fn an_unknown_guidance_is_refused_with_the_choices() {
     let out = plumbline(&["sim", "--scenario", "explore", "--guidance", "spiral"]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("frontier") && err.contains("wall-follow"), "{err}");
+    assert!(
+        err.contains("frontier") && err.contains("wall-follow"),
+        "{err}"
+    );
 }

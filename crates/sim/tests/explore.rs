@@ -21,7 +21,12 @@ impl Recorder for States {
     }
 }
 
-fn explore(world: World, seed: u64, duration_s: f64, strategy: Strategy) -> (Report, Vec<StateSample>) {
+fn explore(
+    world: World,
+    seed: u64,
+    duration_s: f64,
+    strategy: Strategy,
+) -> (Report, Vec<StateSample>) {
     let mut config = SimConfig::new(world, LidarProfile::xv11(), seed);
     let options = Options {
         duration_s: Some(duration_s),
@@ -47,8 +52,14 @@ fn the_hard_worlds_parse() {
         ("closed-room", CLOSED_ROOM),
         ("narrow-gap", NARROW_GAP),
         ("dead-end", include_str!("../worlds/explore/dead-end.world")),
-        ("long-corridor", include_str!("../worlds/explore/long-corridor.world")),
-        ("left-doors", include_str!("../worlds/explore/left-doors.world")),
+        (
+            "long-corridor",
+            include_str!("../worlds/explore/long-corridor.world"),
+        ),
+        (
+            "left-doors",
+            include_str!("../worlds/explore/left-doors.world"),
+        ),
     ] {
         let w = World::parse(text).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(w.name, name);
@@ -97,7 +108,12 @@ fn a_gap_narrower_than_the_vehicle_is_never_flown_through() {
 
 #[test]
 fn a_room_without_a_way_out_is_explored_and_the_vehicle_lands_at_home() {
-    let (report, _) = explore(World::parse(CLOSED_ROOM).unwrap(), 4, 240.0, Strategy::Frontier);
+    let (report, _) = explore(
+        World::parse(CLOSED_ROOM).unwrap(),
+        4,
+        240.0,
+        Strategy::Frontier,
+    );
     let e = report.score.explore.as_ref().unwrap();
     assert!(e.explored_fraction > 0.9, "{e:?}");
     assert!(e.explore_end.is_some(), "{e:?}");

@@ -6,13 +6,13 @@ use super::outputs::create;
 use super::plot::{stacked_panels, Line};
 use crate::plot::{fonts_available, write_png};
 use crate::report::CliError;
-use plotters::prelude::*;
-use plumbline_sim::runner::companion::ExploreEnd;
-use plumbline_sim::runner::{SimConfig, StateSample};
-use plumbline_sim::scenario::explore_score::{ExploreScore, Exploration};
 use plotters::coord::ReverseCoordTranslate;
+use plotters::prelude::*;
 use plumbline_core::geom::Vec2;
 use plumbline_explore::DoneReason;
+use plumbline_sim::runner::companion::ExploreEnd;
+use plumbline_sim::runner::{SimConfig, StateSample};
+use plumbline_sim::scenario::explore_score::{Exploration, ExploreScore};
 use plumbline_slam::grid::CellState;
 use serde_json::{json, Value};
 use std::error::Error;
@@ -94,7 +94,10 @@ fn map_view(
     if labels {
         builder
             .caption(
-                format!("{}: the vehicle's map, flown path, true walls (m)", world.name),
+                format!(
+                    "{}: the vehicle's map, flown path, true walls (m)",
+                    world.name
+                ),
                 ("sans-serif", 20),
             )
             .x_label_area_size(30)

@@ -16,12 +16,12 @@ use super::{Pilot, SetupError};
 use plumbline_core::geom::{normalize_angle, Pose2, Vec2};
 use plumbline_core::guidance::config::GuidanceConfig;
 use plumbline_core::guidance::step::{Guidance, GuidanceMode};
+use plumbline_core::matching::local_map::MapCell;
 use plumbline_core::msgs::{
     CompanionMessages, CompanionSetpoint, FlightMode, MissionCommand, PoseFix, SetpointTarget,
 };
 use plumbline_core::scan::Scan;
 use plumbline_explore::{DoneReason, ExploreStep, Explorer, Path};
-use plumbline_core::matching::local_map::MapCell;
 use plumbline_slam::{local_map_cells, ScanPose, Slam, SlamConfig};
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -214,7 +214,10 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
         // The heading turns toward the guidance's at most at YAW_RATE_RAD_S, and not at all
         // with a lidar that sees all round: the field is flown in the world frame, so turning
         // would buy nothing and cost the scan matcher accuracy.
-        let dt = self.last_t_s.map_or(0.0, |t| (t_s - t) as f32).clamp(0.0, 1.0);
+        let dt = self
+            .last_t_s
+            .map_or(0.0, |t| (t_s - t) as f32)
+            .clamp(0.0, 1.0);
         let step = if self.turns { YAW_RATE_RAD_S * dt } else { 0.0 };
         let turn = cmd
             .yaw_rad

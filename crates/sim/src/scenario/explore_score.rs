@@ -122,9 +122,7 @@ impl ExploreWatch {
             self.people_contacts += 1;
         }
         self.in_contact = touching;
-        self.min_people_clearance_m = self
-            .min_people_clearance_m
-            .min(nearest - Walker::RADIUS_M);
+        self.min_people_clearance_m = self.min_people_clearance_m.min(nearest - Walker::RADIUS_M);
     }
 
     /// The score of the finished flight.

@@ -8,10 +8,10 @@
 //!
 //! [`STATE_RATE_HZ`]: crate::runner::STATE_RATE_HZ
 
-use super::explore_score::{ExploreLogs, ExploreScore, ExploreWatch, Exploration};
+use super::explore_score::{Exploration, ExploreLogs, ExploreScore, ExploreWatch};
 use crate::disturb::Push;
-use crate::runner::companion::{CompanionLog, Strategy};
 use crate::math::Vec3;
+use crate::runner::companion::{CompanionLog, Strategy};
 use crate::runner::onboard_link::FlightLog;
 use crate::runner::{Outcome, Recorder, SimConfig, StateSample, Status, TruthPose};
 use crate::sensors::lidar::LidarScan;
