@@ -131,7 +131,7 @@ impl std::error::Error for ScenarioError {}
 /// SLAM borrows for the flight.
 enum Crew {
     Ready(Pilot<'static>),
-    Explore(AnyExploreCrew),
+    Explore(Box<AnyExploreCrew>),
 }
 
 /// A scenario set up and ready to fly.
@@ -179,7 +179,7 @@ impl Flight {
         config: &SimConfig,
     ) -> Self {
         Self {
-            crew: Crew::Explore(crew),
+            crew: Crew::Explore(Box::new(crew)),
             judge: Judge::Explore {
                 strategy,
                 log,
