@@ -11,11 +11,11 @@
 //! across the gap, so an opening the vehicle cannot use never pulls it in.
 
 use super::config::GuidanceConfig;
-use super::prls::{usable, WallSegments};
+use super::prls::WallSegments;
+use super::sweep::Sweep;
+use crate::fast_math::sin_cos;
 use crate::geom::Vec2;
-use crate::scan::Scan;
 use core::f32::consts::{FRAC_PI_2, PI};
-use libm::{cosf, sinf};
 
 /// Which part of the field is summed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,9 +42,9 @@ pub struct FieldSum {
     pub narrow_gaps: usize,
 }
 
-/// Sums the field over `scan`; `None` when no beam is usable.
-pub fn field_sum<const N: usize, const S: usize>(
-    scan: &Scan<N>,
+/// Sums the field over the sweep; `None` when no beam is usable.
+pub(super) fn field_sum<const N: usize, const S: usize>(
+    sweep: &Sweep<N>,
     walls: &WallSegments<S>,
     cfg: &GuidanceConfig,
     part: FieldPart,
@@ -52,17 +52,13 @@ pub fn field_sum<const N: usize, const S: usize>(
     let mut sum = Vec2::ZERO;
     let mut n = 0usize;
     let mut nearest = f32::INFINITY;
-    let narrow_gaps = for_each_effective_beam(scan, walls, cfg, |angle, range| {
+    let narrow_gaps = for_each_effective_beam(sweep, walls, cfg, |ray, range| {
         let w = 1.0 / (range - cfg.r_min_m()).abs().max(cfg.weight_floor_m);
-        let (s, c) = (sinf(angle), cosf(angle));
-        let ray = Vec2::new(c, s);
         let push = match part {
-            FieldPart::WallFollow => {
-                let gamma = increment_angle(angle, range, cfg.r_goal_m);
-                Vec2::new(cosf(gamma), sinf(gamma))
-            }
+            // γ − θ of eq. 1, applied as a rotation of the beam's own direction.
+            FieldPart::WallFollow => rotate(ray, increment_angle(0.0, range, cfg.r_goal_m)),
             FieldPart::Repulsive if range < cfg.r_goal_m => {
-                ray * (-cosf(FRAC_PI_2 * range / cfg.r_goal_m))
+                ray * -sin_cos(FRAC_PI_2 * range / cfg.r_goal_m).1
             }
             FieldPart::Repulsive => Vec2::ZERO,
         };
@@ -99,49 +95,60 @@ pub fn boosted_gain(nearest_m: f32, cfg: &GuidanceConfig) -> f32 {
     cfg.k_v_m2_s * (1.0 + cfg.k_v_boost * closeness)
 }
 
-/// Calls `f(angle, range)` for every usable beam, and for every beam inside a gap narrower than
-/// `min_gap_width_m` with the range to the chord across the gap where that is nearer.
-/// Returns how many narrow gaps shortened at least one beam (openings flown past).
+/// Calls `f(direction, range)` for every usable beam, and for every beam inside a gap
+/// narrower than `min_gap_width_m` with the range to the chord across the gap where that is
+/// nearer. Returns how many narrow gaps shortened at least one beam (openings flown past).
 fn for_each_effective_beam<const N: usize, const S: usize>(
-    scan: &Scan<N>,
+    sweep: &Sweep<N>,
     walls: &WallSegments<S>,
     cfg: &GuidanceConfig,
-    mut f: impl FnMut(f32, f32),
+    mut f: impl FnMut(Vec2, f32),
 ) -> usize {
-    let beams = scan.beams();
-    let narrow = || {
-        walls
-            .gaps()
-            .iter()
-            .filter(|g| g.width_m < cfg.min_gap_width_m)
-    };
+    let mut narrow = [None; S];
+    let mut narrow_len = 0;
+    for g in walls
+        .gaps()
+        .iter()
+        .filter(|g| g.width_m < cfg.min_gap_width_m)
+    {
+        narrow[narrow_len] = Some(g);
+        narrow_len += 1;
+    }
+    let narrow = &narrow[..narrow_len];
     let mut used = [false; S];
-    for pos in 0..walls.sweep_len() {
-        let beam = &beams[walls.beam_index(pos)];
-        let mut range = if usable(beam) {
-            beam.range_m
+    for pos in 0..sweep.len() {
+        let ray = sweep.unit(pos);
+        let mut range = if sweep.is_usable(pos) {
+            sweep.range_m(pos)
         } else {
             f32::INFINITY
         };
-        for g in narrow().filter(|g| g.narrowest_pos[0] < pos && pos < g.narrowest_pos[1]) {
-            let [a, b] = g.narrowest_m;
-            if let Some(chord) = ray_hits_chord(beam.angle_rad, a, b) {
-                if chord < range - cfg.line_tolerance_m {
-                    used[g.after] = true;
+        for g in narrow.iter().flatten() {
+            let [lo, hi] = g.narrowest_pos;
+            if lo < pos && pos < hi {
+                let [a, b] = g.narrowest_m;
+                if let Some(chord) = ray_hits_chord(ray, a, b) {
+                    if chord < range - cfg.line_tolerance_m {
+                        used[g.after] = true;
+                    }
+                    range = range.min(chord);
                 }
-                range = range.min(chord);
             }
         }
-        if range.is_finite() && beam.angle_rad.is_finite() {
-            f(beam.angle_rad, range);
+        if range.is_finite() && ray != Vec2::ZERO {
+            f(ray, range);
         }
     }
     used.iter().filter(|&&u| u).count()
 }
 
-/// Range along the ray at `angle_rad` from the sensor to the segment `a`-`b`, if it crosses it.
-fn ray_hits_chord(angle_rad: f32, a: Vec2, b: Vec2) -> Option<f32> {
-    let dir = Vec2::new(cosf(angle_rad), sinf(angle_rad));
+fn rotate(v: Vec2, angle_rad: f32) -> Vec2 {
+    let (s, c) = sin_cos(angle_rad);
+    Vec2::new(c * v.x - s * v.y, s * v.x + c * v.y)
+}
+
+/// Range along the unit ray `dir` from the sensor to the segment `a`-`b`, if it crosses it.
+fn ray_hits_chord(dir: Vec2, a: Vec2, b: Vec2) -> Option<f32> {
     let e = b - a;
     let denom = dir.cross(e);
     if denom.abs() < 1e-9 {

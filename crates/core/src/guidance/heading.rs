@@ -4,7 +4,8 @@
 //! both sides).
 
 use super::config::GuidanceConfig;
-use super::prls::{relative_angle, usable, WallSegments};
+use super::prls::WallSegments;
+use super::sweep::{relative_angle, usable};
 use crate::scan::Scan;
 use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 

@@ -12,7 +12,9 @@ pub mod gaps;
 pub mod guard;
 pub mod heading;
 pub mod prls;
+mod run;
 pub mod step;
+mod sweep;
 
 pub use config::{GuidanceConfig, GuidanceConfigError};
 pub use guard::Guard;

@@ -9,6 +9,7 @@ use super::field::{field_sum, FieldPart, FieldSum};
 use super::guard::{guard_velocity, Guard};
 use super::heading::{choose_heading, HeadingChoice, HeadingRule, SideClearance};
 use super::prls::WallSegments;
+use super::sweep::Sweep;
 use crate::geom::{normalize_angle, Pose2, Vec2};
 use crate::scan::Scan;
 use libm::{atan2f, cosf, sinf};
@@ -110,12 +111,13 @@ impl<const S: usize> Guidance<S> {
                 return hover(Outcome::InvalidWaypoint, None);
             }
         }
-        self.walls.extract(scan, &cfg);
+        let sweep = Sweep::new(scan, cfg.rule_start_rad);
+        self.walls.extract_sweep(&sweep, &cfg);
         let part = match mode {
             GuidanceMode::WallFollow => FieldPart::WallFollow,
             GuidanceMode::TowardWaypoint { .. } => FieldPart::Repulsive,
         };
-        let Some(field) = field_sum(scan, &self.walls, &cfg, part) else {
+        let Some(field) = field_sum(&sweep, &self.walls, &cfg, part) else {
             return hover(Outcome::NoUsableBeams, None);
         };
         let sides = SideClearance::measure(scan);
@@ -141,7 +143,7 @@ impl<const S: usize> Guidance<S> {
             }
         };
         let (limited, speed_limited) = limit_speed(wish_body, cfg.max_speed_m_s);
-        let (safe, guard) = guard_velocity(limited, scan, &cfg);
+        let (safe, guard) = guard_velocity(limited, &sweep, &cfg);
         let world = pose.rotate(safe);
         GuidanceCommand {
             velocity_world_m_s: [world.x, world.y],
