@@ -376,3 +376,28 @@ fn size_of_the_guidance_state() {
     println!("Guidance<64>: {s} bytes");
     assert!(s <= 8 * 1024, "{s}");
 }
+
+#[test]
+fn a_single_wall_is_followed_forward_at_about_r_goal() {
+    // Seed 002, Fig. 3: along a straight wall the field moves the vehicle forward and corrects
+    // its distance. The wall's oblique beams pull toward it (eq. 1), so the distance settles a
+    // little inside r_goal (1.2 m): between 0.9 m and 1.2 m.
+    let world = vec![wall((-50.0, -1.2), (50.0, -1.2))];
+    for (distance, toward_wall) in [
+        (1.8f32, true),
+        (1.5, true),
+        (1.2, true),
+        (0.9, false),
+        (0.7, false),
+    ] {
+        let c = wall_follow(&world, Pose2::new(0.0, distance - 1.2, 0.0));
+        let [vx, vy] = c.velocity_world_m_s;
+        println!("{distance} m from the wall: v = ({vx:.3}, {vy:.3})");
+        assert!(vx > 0.2, "{distance}: {vx}");
+        assert_eq!(vy < 0.0, toward_wall, "{distance}: {vy}");
+        assert!(matches!(
+            c.decision.outcome,
+            Outcome::WallFollow(HeadingRule::FollowWall { gap: None, .. })
+        ));
+    }
+}

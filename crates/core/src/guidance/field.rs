@@ -158,3 +158,63 @@ fn ray_hits_chord(dir: Vec2, a: Vec2, b: Vec2) -> Option<f32> {
     let u = a.cross(dir) / denom;
     (t > 0.0 && (-1e-3..=1.0 + 1e-3).contains(&u)).then_some(t)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scan::{Beam, Scan};
+    use core::f32::consts::FRAC_PI_2;
+
+    fn close(a: f32, b: f32) -> bool {
+        (crate::geom::normalize_angle(a - b)).abs() < 1e-5
+    }
+
+    #[test]
+    fn eq1_turns_each_beam_by_its_range() {
+        let rg = 1.2;
+        // A hit at r_goal on the right pushes straight ahead; on the left, straight back.
+        assert!(close(increment_angle(-FRAC_PI_2, rg, rg), 0.0));
+        assert!(close(increment_angle(FRAC_PI_2, rg, rg), PI));
+        // Touching: straight away from the hit. At 2 r_goal and beyond: toward it (no jump).
+        assert!(close(increment_angle(0.3, 0.0, rg), 0.3 + PI));
+        assert!(close(increment_angle(0.3, 2.0 * rg, rg), 0.3));
+        assert!(close(increment_angle(0.3, 5.0, rg), 0.3));
+    }
+
+    #[test]
+    fn the_gain_rises_from_r_goal_to_r_min() {
+        let cfg = GuidanceConfig::default();
+        let k = cfg.k_v_m2_s;
+        assert_eq!(boosted_gain(3.0, &cfg), k);
+        assert_eq!(boosted_gain(cfg.r_goal_m, &cfg), k);
+        assert!((boosted_gain(cfg.r_min_m(), &cfg) - 3.0 * k).abs() < 1e-5);
+        assert!((boosted_gain(0.5 * (cfg.r_goal_m + cfg.r_min_m()), &cfg) - 2.0 * k).abs() < 1e-4);
+        assert!((boosted_gain(0.1, &cfg) - 3.0 * k).abs() < 1e-5);
+    }
+
+    #[test]
+    fn eq2_on_one_beam_is_k_v_over_the_distance_beyond_r_min() {
+        let cfg = GuidanceConfig::default();
+        let mut scan: Scan<4> = Scan::new(0.0);
+        scan.push(Beam::new(-FRAC_PI_2, cfg.r_goal_m)).unwrap();
+        scan.push(Beam::invalid(0.0)).unwrap();
+        let sweep = Sweep::new(&scan, cfg.rule_start_rad);
+        let walls = WallSegments::<4>::default();
+        let f = field_sum(&sweep, &walls, &cfg, FieldPart::WallFollow).unwrap();
+        let expected = cfg.k_v_m2_s / (cfg.r_goal_m - cfg.r_min_m());
+        assert_eq!(f.beams, 1);
+        assert!((f.velocity_m_s.x - expected).abs() < 1e-4, "{f:?}");
+        assert!(f.velocity_m_s.y.abs() < 1e-4, "{f:?}");
+        // The repulsive part of a hit at r_goal is nil; nearer, it points away from the hit.
+        let r = field_sum(&sweep, &walls, &cfg, FieldPart::Repulsive).unwrap();
+        assert!(r.velocity_m_s.norm() < 1e-5, "{r:?}");
+        let mut near: Scan<4> = Scan::new(0.0);
+        near.push(Beam::new(-FRAC_PI_2, 0.7)).unwrap();
+        let sweep = Sweep::new(&near, cfg.rule_start_rad);
+        let r = field_sum(&sweep, &walls, &cfg, FieldPart::Repulsive).unwrap();
+        assert!(
+            r.velocity_m_s.y > 0.5 && r.velocity_m_s.x.abs() < 1e-4,
+            "{r:?}"
+        );
+    }
+}

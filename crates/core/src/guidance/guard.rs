@@ -86,3 +86,30 @@ fn respects(v: Vec2, mut hits: impl Iterator<Item = (Vec2, f32)>, cfg: &Guidance
         limit >= speed || v.dot(u) <= limit + 1e-4
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scan::Beam;
+
+    #[test]
+    fn the_speed_toward_a_near_wall_is_cut_to_the_allowance_and_the_rest_kept() {
+        let cfg = GuidanceConfig::default();
+        let mut scan: Scan<2> = Scan::new(0.0);
+        scan.push(Beam::new(0.0, cfg.r_min_m() + 0.1)).unwrap();
+        let sweep = Sweep::new(&scan, cfg.rule_start_rad);
+        let (v, g) = guard_velocity(Vec2::new(0.4, 0.3), &sweep, &cfg);
+        assert_eq!(g, Guard::Limited);
+        assert!((v.x - 0.1 * cfg.approach_rate_1_s).abs() < 1e-5 && (v.y - 0.3).abs() < 1e-6);
+        // Away from the wall: untouched. Inside r_min: no approach at all.
+        assert_eq!(
+            guard_velocity(Vec2::new(-0.4, 0.3), &sweep, &cfg),
+            (Vec2::new(-0.4, 0.3), Guard::Clear)
+        );
+        let mut inside: Scan<2> = Scan::new(0.0);
+        inside.push(Beam::new(0.0, 0.2)).unwrap();
+        let sweep = Sweep::new(&inside, cfg.rule_start_rad);
+        let (v, _) = guard_velocity(Vec2::new(0.4, 0.0), &sweep, &cfg);
+        assert!(v.x.abs() < 1e-6);
+    }
+}
