@@ -7,7 +7,7 @@ use crate::geom::{normalize_angle, Vec2};
 use crate::scan::{Beam, Scan};
 use core::f32::consts::TAU;
 
-/// The beams of one scan in sweep order, on the stack (20 bytes a beam).
+/// The beams of one scan in sweep order, on the stack (17 bytes a beam: 6.1 KB for 360).
 pub struct Sweep<const N: usize> {
     unit: [Vec2; N],
     range_m: [f32; N],
