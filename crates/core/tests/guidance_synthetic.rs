@@ -401,3 +401,22 @@ fn a_single_wall_is_followed_forward_at_about_r_goal() {
         ));
     }
 }
+
+#[test]
+fn a_corridor_across_the_nose_is_still_flown_along() {
+    // A vehicle that does not turn to its heading (an all-round lidar needs no turning) sees
+    // the corridor's walls ahead of and behind it: it still keeps to the middle and moves
+    // along the corridor, never toward a wall.
+    let world = corridor(2.0);
+    for yaw in [PI / 2.0, -PI / 2.0, 2.0, PI] {
+        for y in [-0.3f32, 0.0, 0.3] {
+            let cmd = wall_follow(&world, Pose2::new(0.0, y, yaw));
+            let [vx, vy] = cmd.velocity_world_m_s;
+            println!("yaw {yaw:.2} y {y:+.1}: v = ({vx:.3}, {vy:.3})");
+            assert!(cmd.decision.centred, "{:?}", cmd.decision);
+            assert!((cmd.decision.free_width_m.unwrap() - 2.0).abs() < 0.01);
+            assert!(vx.abs() >= 0.39, "along the corridor: {vx}");
+            assert!((vy + y).abs() < 1e-3, "toward the middle: {vy}");
+        }
+    }
+}
