@@ -124,8 +124,7 @@ fn for_each_effective_beam<const N: usize, const S: usize>(
             f32::INFINITY
         };
         for g in narrow.iter().flatten() {
-            let [lo, hi] = g.narrowest_pos;
-            if lo < pos && pos < hi {
+            if g.spans(pos) {
                 let [a, b] = g.narrowest_m;
                 if let Some(chord) = ray_hits_chord(ray, a, b) {
                     if chord < range - cfg.line_tolerance_m {

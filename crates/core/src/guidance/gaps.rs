@@ -5,7 +5,8 @@ use super::sweep::Sweep;
 use crate::geom::Vec2;
 use core::f32::consts::{PI, TAU};
 
-/// The opening between segment `after` and segment `after + 1`.
+/// The opening between segment `after` and segment `after + 1` (for the gap across the start
+/// of a full-turn sweep, between the last segment and the first).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Gap {
     /// Index of the segment before the gap; the one after is `after + 1`.
@@ -14,9 +15,9 @@ pub struct Gap {
     pub from_m: Vec2,
     pub to_m: Vec2,
     /// Free width across the gap, m: the shortest distance from either edge of the opening to
-    /// any hit on its far side up to the end of the next segment (and back to the start of the
-    /// segment before), so clutter in a door (a person) narrows the door. Hits are
-    /// discrete, so this exceeds the true opening by up to one beam spacing at each edge.
+    /// any hit on its far side (within half a turn, not back along the edge's own wall), so
+    /// clutter in a door (a person) narrows the door. Hits are discrete, so this exceeds the
+    /// true opening by up to one beam spacing at each edge.
     pub width_m: f32,
     /// The two hits `width_m` apart, sensor frame, m, in sweep order ...
     pub narrowest_m: [Vec2; 2],
@@ -24,44 +25,94 @@ pub struct Gap {
     pub narrowest_pos: [usize; 2],
 }
 
-/// Fills `gaps[k]` for the opening after `segments[k]`.
+impl Gap {
+    /// True for sweep positions strictly between the narrowest pair (across the sweep's start
+    /// for the seam gap).
+    pub fn spans(&self, pos: usize) -> bool {
+        let [lo, hi] = self.narrowest_pos;
+        if lo < hi {
+            lo < pos && pos < hi
+        } else {
+            pos > lo || pos < hi
+        }
+    }
+}
+
+/// Fills `gaps[k]` for the opening after `segments[k]`; returns the gap across the start of
+/// the sweep, between the last segment and the first, when the sweep is an ordered full turn
+/// (no hole wider than `max_step_rad` where it closes). In a full turn the far side of any
+/// opening may lie past the sweep's start, so every search goes round.
 pub(super) fn measure_gaps<const N: usize>(
     segments: &[WallSegment],
     gaps: &mut [Gap],
     sweep: &Sweep<N>,
-) {
+    max_step_rad: f32,
+) -> Option<Gap> {
+    let full_turn = sweep.len() >= 2
+        && sweep.is_ordered()
+        && TAU - sweep.rel_rad(sweep.len() - 1) + sweep.rel_rad(0) <= max_step_rad;
     for (k, gap) in gaps.iter_mut().enumerate() {
-        let (a, b) = (&segments[k], &segments[k + 1]);
-        let from = sweep.hit(a.last_pos).unwrap_or(a.end_m);
-        let to = sweep.hit(b.first_pos).unwrap_or(b.start_m);
-        let mut best = Narrowest {
-            squared_m2: (to - from).norm_squared(),
-            pts: [from, to],
-            pos: [a.last_pos, b.first_pos],
-        };
-        // Counter-clockwise from the edge before the gap, clockwise from the edge after it.
-        let after = Edge {
-            pos: a.last_pos,
-            at: from,
-            along: a.end_m - a.start_m,
-            forward: true,
-        };
-        let before = Edge {
-            pos: b.first_pos,
-            at: to,
-            along: b.start_m - b.end_m,
-            forward: false,
-        };
-        after.search(sweep, a.last_pos + 1..sweep.len(), &mut best);
-        before.search(sweep, (0..b.first_pos).rev(), &mut best);
-        *gap = Gap {
-            after: k,
-            from_m: from,
-            to_m: to,
-            width_m: libm::sqrtf(best.squared_m2),
-            narrowest_m: best.pts,
-            narrowest_pos: best.pos,
-        };
+        *gap = measure(k, &segments[k], &segments[k + 1], sweep, full_turn);
+    }
+    match (segments.first(), segments.last()) {
+        (Some(first), Some(last)) if full_turn && segments.len() >= 2 => {
+            Some(measure(segments.len() - 1, last, first, sweep, true))
+        }
+        _ => None,
+    }
+}
+
+/// The gap from the end of `a` to the start of `b`; `wraps` lets the searches go round past the
+/// end of the sweep (a full turn).
+fn measure<const N: usize>(
+    k: usize,
+    a: &WallSegment,
+    b: &WallSegment,
+    sweep: &Sweep<N>,
+    wraps: bool,
+) -> Gap {
+    let from = sweep.hit(a.last_pos).unwrap_or(a.end_m);
+    let to = sweep.hit(b.first_pos).unwrap_or(b.start_m);
+    let mut best = Narrowest {
+        squared_m2: (to - from).norm_squared(),
+        pts: [from, to],
+        pos: [a.last_pos, b.first_pos],
+    };
+    // Counter-clockwise from the edge before the gap, clockwise from the edge after it.
+    let after = Edge {
+        pos: a.last_pos,
+        at: from,
+        along: a.end_m - a.start_m,
+        forward: true,
+    };
+    let before = Edge {
+        pos: b.first_pos,
+        at: to,
+        along: b.start_m - b.end_m,
+        forward: false,
+    };
+    let (round_after, round_before) = if wraps {
+        (0..a.first_pos, b.last_pos + 1..sweep.len())
+    } else {
+        (0..0, 0..0)
+    };
+    after.search(
+        sweep,
+        (a.last_pos + 1..sweep.len()).chain(round_after),
+        &mut best,
+    );
+    before.search(
+        sweep,
+        (0..b.first_pos).rev().chain(round_before.rev()),
+        &mut best,
+    );
+    Gap {
+        after: k,
+        from_m: from,
+        to_m: to,
+        width_m: libm::sqrtf(best.squared_m2),
+        narrowest_m: best.pts,
+        narrowest_pos: best.pos,
     }
 }
 

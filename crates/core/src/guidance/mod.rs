@@ -17,8 +17,8 @@
 //!
 //! Limits: a gap's width is measured between hits, so it exceeds the true opening by up to a
 //! beam spacing at each edge (the default threshold leaves 0.3 m over the vehicle's width);
-//! a narrow opening that straddles the start of the sweep (120° right of the nose by default)
-//! is not closed for the field, only kept at bay by the guard.
+//! with a lidar that does not see all round, an opening whose far side lies in the blind
+//! sector is measured only from the side that is seen.
 
 pub mod config;
 pub mod field;

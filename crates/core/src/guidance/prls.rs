@@ -59,6 +59,7 @@ impl WallSegment {
 pub struct WallSegments<const S: usize> {
     segments: [WallSegment; S],
     gaps: [Gap; S],
+    seam: Option<Gap>,
     len: usize,
     truncated: bool,
     sweep_start: usize,
@@ -70,6 +71,7 @@ impl<const S: usize> Default for WallSegments<S> {
         Self {
             segments: [WallSegment::default(); S],
             gaps: [Gap::default(); S],
+            seam: None,
             len: 0,
             truncated: false,
             sweep_start: 0,
@@ -90,6 +92,13 @@ impl<const S: usize> WallSegments<S> {
     /// Gaps between consecutive segments; `gaps()[k]` lies between segments `k` and `k + 1`.
     pub fn gaps(&self) -> &[Gap] {
         &self.gaps[..self.len.saturating_sub(1)]
+    }
+
+    /// The gap across the start of the sweep (behind on the right by default), between the last
+    /// segment and the first, when the scan is a full turn. The heading rules do not use it
+    /// (their chain starts there); the field closes it when it is narrow.
+    pub fn seam_gap(&self) -> Option<&Gap> {
+        self.seam.as_ref()
     }
 
     /// True when the scan held more segments than `S`: the later ones were dropped.
@@ -145,7 +154,8 @@ impl<const S: usize> WallSegments<S> {
         }
         self.close(&mut run, sweep, cfg);
         let n = self.len.saturating_sub(1);
-        measure_gaps(&self.segments[..self.len], &mut self.gaps[..n], sweep);
+        let segments = &self.segments[..self.len];
+        self.seam = measure_gaps(segments, &mut self.gaps[..n], sweep, cfg.max_beam_step_rad);
     }
 
     /// The hits just past a corner can lie within tolerance of the old wall; they are handed
