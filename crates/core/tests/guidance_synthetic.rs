@@ -201,7 +201,6 @@ fn a_door_wider_than_the_threshold_is_taken() {
 fn a_door_narrower_than_the_vehicle_is_flown_past() {
     let pose = Pose2::new(0.2, 0.0, 0.0);
     let (cmd, g) = step(&wall_with_door(Some(0.6)), pose, GuidanceMode::WallFollow);
-    let closed = wall_follow(&wall_with_door(None), pose);
     println!(
         "door 0.6 m: gaps {:?}, v {:?}",
         g.walls().gaps(),
