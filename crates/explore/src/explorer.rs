@@ -111,6 +111,16 @@ impl Explorer {
         self.home
     }
 
+    /// The frontier cell being flown to, map frame (for plots and logs).
+    pub fn goal(&self) -> Option<Vec2> {
+        self.plan.as_ref().map(|p| p.goal)
+    }
+
+    /// The planned path to the goal, from where the vehicle was when it was planned.
+    pub fn path(&self) -> Option<&Path> {
+        self.plan.as_ref().map(|p| &p.path)
+    }
+
     pub fn set_home(&mut self, home: Vec2) {
         self.home = Some(home);
     }
