@@ -27,6 +27,14 @@ pub struct ExploreConfig {
     /// The plan is renewed at most this often while the map only grows, s (planning costs a
     /// pass over the map; the goal being reached or seen renews it at once).
     pub replan_interval_s: f32,
+    /// Plans look for the nearest frontier within a square of this half-side round the
+    /// vehicle first, m (the XV-11's range: the frontier just uncovered is usually there), and
+    /// over the whole map only when the square holds none, so a plan's work does not grow
+    /// with the building.
+    pub plan_window_m: f32,
+    /// The whole map's planning grid (coverage, the way home) is made again at most this
+    /// often while the map only grows, s; a plan that needs it makes it at once.
+    pub full_map_interval_s: f32,
     /// The goal counts as reached within this distance, m.
     pub goal_reached_m: f32,
     /// A goal pursued this long without being reached or seen is given up as unreachable
@@ -55,6 +63,8 @@ impl Default for ExploreConfig {
             min_frontier_m: 0.4,
             lookahead_m: 1.0,
             replan_interval_s: 1.0,
+            plan_window_m: 6.0,
+            full_map_interval_s: 5.0,
             goal_reached_m: 0.3,
             goal_timeout_s: 30.0,
             unreachable_radius_m: 0.5,
@@ -99,6 +109,7 @@ impl ExploreConfig {
             ("vehicle_radius_m", self.vehicle_radius_m),
             ("lookahead_m", self.lookahead_m),
             ("goal_reached_m", self.goal_reached_m),
+            ("plan_window_m", self.plan_window_m),
             ("goal_timeout_s", self.goal_timeout_s),
             ("coverage_stall_s", self.coverage_stall_s),
         ];
@@ -113,6 +124,7 @@ impl ExploreConfig {
             ("clearance_margin_m", self.clearance_margin_m),
             ("min_frontier_m", self.min_frontier_m),
             ("replan_interval_s", self.replan_interval_s),
+            ("full_map_interval_s", self.full_map_interval_s),
             ("unreachable_radius_m", self.unreachable_radius_m),
             ("coverage_growth_m2", self.coverage_growth_m2),
             ("no_frontier_confirm_s", self.no_frontier_confirm_s),

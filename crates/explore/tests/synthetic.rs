@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{explorer, room, Wall};
+use common::{explorer, explorer_with, room, Wall};
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_explore::frontier::clusters;
 use plumbline_explore::plan_grid::PlanGrid;
@@ -51,7 +51,7 @@ fn the_frontier_of_a_room_with_a_door_is_the_door() {
     let walls = room_with_door(1.2);
     let mut e = explorer(&walls, &INSIDE);
     let config = ExploreConfig::default();
-    let g = PlanGrid::new(e.map().grid(), config.plan_factor(), config.r_min_m());
+    let g = PlanGrid::new(e.map().grid(), config.plan_factor(), config.r_min_m(), None);
     let f = clusters(&g, 4);
     assert!(!f.clusters.is_empty());
     for c in &f.clusters {
@@ -159,6 +159,27 @@ fn a_closed_room_is_done() {
     );
     let home = e.path_home(at(4.0, 3.0)).unwrap();
     assert!((home.length_m - (3.0f32 * 3.0 + 2.0 * 2.0).sqrt()).abs() < 0.05);
+}
+
+#[test]
+fn the_edge_of_the_planning_window_is_no_frontier() {
+    // A 1 m window in a closed 5 m room: the room beyond the window is known, so nothing is
+    // left to explore, and the door case still finds the door beyond the window.
+    let config = ExploreConfig {
+        plan_window_m: 1.0,
+        ..ExploreConfig::default()
+    };
+    let mut e = explorer_with(config, &room(0.0, 0.0, 5.0, 4.0, &[]), &INSIDE);
+    assert!(matches!(e.next(at(2.0, 2.0)), ExploreStep::Waypoint(_)));
+    e.set_time(2.0);
+    assert_eq!(
+        e.next(at(2.0, 2.0)),
+        ExploreStep::Done(DoneReason::NoReachableFrontier)
+    );
+    let mut e = explorer_with(config, &room_with_door(1.2), &INSIDE);
+    assert!(matches!(e.next(at(1.5, 2.0)), ExploreStep::Waypoint(_)));
+    assert!(e.goal().unwrap().x > 5.0);
+    assert_eq!(e.stats().full_map_plans, 1);
 }
 
 #[test]

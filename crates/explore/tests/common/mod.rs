@@ -82,7 +82,11 @@ pub fn room(x0: f32, y0: f32, x1: f32, y1: f32, openings: &[(usize, f32, f32)]) 
 
 /// An explorer whose map holds scans of `walls` from each of `poses`, clock at 0.
 pub fn explorer(walls: &[Wall], poses: &[Pose2]) -> Explorer {
-    let mut e = Explorer::new(ExploreConfig::default()).unwrap();
+    explorer_with(ExploreConfig::default(), walls, poses)
+}
+
+pub fn explorer_with(config: ExploreConfig, walls: &[Wall], poses: &[Pose2]) -> Explorer {
+    let mut e = Explorer::new(config).unwrap();
     for &p in poses {
         e.map_mut().insert_at(p, &scan(walls, p)).unwrap();
     }
