@@ -65,13 +65,14 @@ fn main() {
         let stats = explorer.stats();
         println!(
             "{{\"world\": \"{world}\", \"lidar\": \"xv11\", \"scans\": {}, \"keyframes\": {}, \
-             \"map_rebuilds\": {}, \"plans\": {}, \"known_free_m2\": {:.1}, \
+             \"map_rebuilds\": {}, \"plans\": {}, \"full_map_plans\": {}, \"known_free_m2\": {:.1}, \
              \"slam\": {}, \"map_update\": {}, \"next\": {}, \"explore_total\": {}, \
              \"path_home_us\": {home_us:.1}, \"path_home_m\": {:.2}}}",
             scans.len(),
             slam.keyframe_count(),
             stats.map_rebuilds,
             stats.plans,
+            stats.full_map_plans,
             stats.known_free_m2,
             figures(slam_us),
             figures(map_us),

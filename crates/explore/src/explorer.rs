@@ -66,6 +66,8 @@ struct Plan {
     map_version: u64,
     /// When this goal (or one within the unreachable radius of it) was first chosen.
     pursued_since_s: f64,
+    /// The window round the vehicle held no frontier; the plan is over the whole map.
+    whole_map: bool,
 }
 
 pub struct Explorer {
@@ -88,8 +90,12 @@ pub struct Explorer {
 impl Explorer {
     pub fn new(config: ExploreConfig) -> Result<Self, ConfigError> {
         config.validate()?;
-        let map = LiveMap::new(config.grid, config.map_range_m)
-            .map_err(|e| ConfigError(format!("grid: {e}")))?;
+        let map = LiveMap::new(
+            config.grid,
+            config.map_range_m,
+            config.rebuild_keyframes_per_scan,
+        )
+        .map_err(|e| ConfigError(format!("grid: {e}")))?;
         Ok(Self {
             config,
             map,
@@ -197,8 +203,16 @@ impl Explorer {
                 self.given_up.push(plan.goal);
                 self.stats.goals_given_up += 1;
             }
+            // A plan that needed the whole map (the frontier is far) is renewed as often as
+            // the whole map's grid, so a long way to a far frontier is not planned anew
+            // every second.
+            let interval = if plan.whole_map {
+                self.config.full_map_interval_s
+            } else {
+                self.config.replan_interval_s
+            };
             let stale = plan.map_version != self.map.version()
-                && self.now_s - plan.made_s >= f64::from(self.config.replan_interval_s);
+                && self.now_s - plan.made_s >= f64::from(interval);
             if reached || seen || late || stale {
                 self.replan(p);
             }
@@ -307,7 +321,8 @@ impl Explorer {
             Some((p, config.plan_window_m)),
         );
         let mut plan = nearest_frontier(&window, p, &config, &self.given_up);
-        if plan.is_none() {
+        let whole_map = plan.is_none();
+        if whole_map {
             self.stats.full_map_plans += 1;
             let given_up = std::mem::take(&mut self.given_up);
             plan = nearest_frontier(self.full_grid(true), p, &config, &given_up);
@@ -327,6 +342,7 @@ impl Explorer {
                     made_s: now,
                     map_version: version,
                     pursued_since_s,
+                    whole_map,
                 });
                 self.no_frontier_since = None;
                 self.last_empty = None;
