@@ -69,7 +69,7 @@ impl Default for ExploreConfig {
             lookahead_m: 1.0,
             replan_interval_s: 1.0,
             plan_window_m: 6.0,
-            full_map_interval_s: 5.0,
+            full_map_interval_s: 10.0,
             goal_reached_m: 0.3,
             goal_timeout_s: 30.0,
             unreachable_radius_m: 0.5,

@@ -84,6 +84,8 @@ pub struct Explorer {
     coverage: (f32, f64),
     no_frontier_since: Option<f64>,
     done: Option<DoneReason>,
+    /// The last finite position `next` was given.
+    last_position: Option<Vec2>,
     stats: ExploreStats,
 }
 
@@ -108,6 +110,7 @@ impl Explorer {
             coverage: (0.0, f64::NAN),
             no_frontier_since: None,
             done: None,
+            last_position: None,
             stats: ExploreStats::default(),
         })
     }
@@ -189,8 +192,11 @@ impl Explorer {
         }
         let p = pose.translation();
         if !p.is_finite() {
-            return ExploreStep::Waypoint(p);
+            // No position to plan from: hold the last finite one (or home) rather than hand a
+            // NaN to the velocity field.
+            return ExploreStep::Waypoint(self.last_position.or(self.home).unwrap_or(Vec2::ZERO));
         }
+        self.last_position = Some(p);
         self.full_grid(false);
         if self.now_s - self.coverage.1 >= f64::from(self.config.coverage_stall_s) {
             return self.finish(DoneReason::CoverageStalled);

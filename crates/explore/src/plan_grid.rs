@@ -229,19 +229,66 @@ impl PlanGrid {
         )
     }
 
-    /// Whether every point of the segment lies in a cell that passes `ok` (sampled every
-    /// quarter cell: a path may clip the corner of a cell by less than that, which the
-    /// clearance of safe cells absorbs).
+    /// Whether every cell the segment passes through passes `ok` (an exact walk along the
+    /// segment, cell by cell: a piece of a clear segment is clear too).
     pub fn segment_clear(&self, a: Vec2, b: Vec2, ok: impl Fn(usize) -> bool) -> bool {
-        let steps = ((b - a).norm() / (0.25 * self.cell_m)).ceil() as usize;
-        (0..=steps).all(|s| {
-            let t = if steps == 0 {
-                0.0
+        let local = |p: Vec2| {
+            Vec2::new(
+                p.x / self.cell_m - self.origin.i as f32,
+                p.y / self.cell_m - self.origin.j as f32,
+            )
+        };
+        let (a, b) = (local(a), local(b));
+        let limit = (self.width + self.height) as f32;
+        let inside = |p: Vec2| p.is_finite() && p.x.abs() < limit && p.y.abs() < limit;
+        if !(inside(a) && inside(b)) {
+            return false;
+        }
+        let (mut i, mut j) = (a.x.floor() as i32, a.y.floor() as i32);
+        let end = (b.x.floor() as i32, b.y.floor() as i32);
+        let d = b - a;
+        // Along the segment (0..1): where the next column and row boundaries are crossed, and
+        // how far apart the crossings are.
+        let axis = |from: f32, cell: i32, delta: f32| -> (i32, f32, f32) {
+            if delta > 0.0 {
+                (1, (cell as f32 + 1.0 - from) / delta, 1.0 / delta)
+            } else if delta < 0.0 {
+                (-1, (from - cell as f32) / -delta, -1.0 / delta)
             } else {
-                s as f32 / steps as f32
-            };
-            self.index_of(a + (b - a) * t).is_some_and(&ok)
-        })
+                (0, f32::INFINITY, f32::INFINITY)
+            }
+        };
+        let (si, mut next_x, step_x) = axis(a.x, i, d.x);
+        let (sj, mut next_y, step_y) = axis(a.y, j, d.y);
+        // Through a cell corner (within a thousandth of a cell) both cells beside the corner
+        // count as touched: a piece of the segment, computed with other rounding, then checks
+        // the same cells.
+        let tie = 1e-3 / d.norm().max(1e-6);
+        let cell_ok = |i: i32, j: i32| self.index(i, j).is_some_and(&ok);
+        let steps = (end.0 - i).unsigned_abs() + (end.1 - j).unsigned_abs();
+        for _ in 0..steps {
+            if !cell_ok(i, j) {
+                return false;
+            }
+            if (i, j) == end {
+                break;
+            }
+            if (next_x - next_y).abs() < tie && si != 0 && sj != 0 {
+                if !(cell_ok(i + si, j) && cell_ok(i, j + sj)) {
+                    return false;
+                }
+                (i, j) = (i + si, j + sj);
+                next_x += step_x;
+                next_y += step_y;
+            } else if next_x < next_y {
+                i += si;
+                next_x += step_x;
+            } else {
+                j += sj;
+                next_y += step_y;
+            }
+        }
+        self.index(i, j).is_some_and(&ok) && self.index(end.0, end.1).is_some_and(&ok)
     }
 }
 

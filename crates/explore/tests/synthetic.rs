@@ -256,3 +256,14 @@ fn a_star_finds_the_shortest_way_round_a_wall_to_within_a_cell() {
         );
     }
 }
+
+#[test]
+fn a_pose_that_is_not_finite_holds_the_last_position() {
+    let mut e = explorer(&room_with_door(1.2), &INSIDE);
+    assert!(matches!(e.next(at(1.5, 2.0)), ExploreStep::Waypoint(_)));
+    assert_eq!(
+        e.next(Pose2::new(f32::NAN, 2.0, 0.0)),
+        ExploreStep::Waypoint(Vec2::new(1.5, 2.0))
+    );
+    assert_eq!(e.path_home(Pose2::new(f32::INFINITY, 0.0, 0.0)), None);
+}
