@@ -190,14 +190,17 @@ impl Mission {
         }
     }
 
-    /// Mode entry: a new mission mode starts its clock and forgets the last leg's setpoint; a
-    /// landing or a disarm ends the mission.
+    /// Mode entry: a new mission mode starts its clock and forgets the last leg's setpoint;
+    /// exploring takes up the start request (a hold after a manual takeover waits for a new
+    /// one); a disarm ends the mission.
     pub fn enter(&mut self, mode: FlightMode, t_s: f64) {
         self.mode_since_t_s = t_s;
         self.setpoint = None;
         self.stale_hold = None;
-        if mode == FlightMode::Disarmed {
-            *self = Self::new(self.config);
+        match mode {
+            FlightMode::Explore => self.start_requested = false,
+            FlightMode::Disarmed => *self = Self::new(self.config),
+            _ => {}
         }
     }
 
