@@ -346,3 +346,75 @@ fn bad_pose_fixes_are_refused_and_counted_in_flight() {
     assert_eq!((fixes.invalid, fixes.accepted), (10, accepted), "{fixes:?}");
     assert_eq!(f.out.mode, FlightMode::Explore);
 }
+
+#[test]
+fn the_time_budget_ends_exploring() {
+    let mut c = Companion::new();
+    c.goal = Some(Goal::Point([0.3, 0.0]));
+    let mut cfg = config();
+    cfg.mission.explore_budget_s = 3.0;
+    let mut f = Flight::new(cfg, 16);
+    fly(&mut f, &mut c, 0.2, |_, _| {});
+    f.veh.pilot.arm = true;
+    c.command = Some(MissionCommand::StartExplore);
+    fly(&mut f, &mut c, 10.0, |_, _| {});
+    assert_eq!((f.out.mode, f.out.failsafe), (FlightMode::Return, None));
+    let entered = |mode| {
+        f.ap.events()
+            .iter()
+            .find(|e| matches!(e.kind, EventKind::ModeChange { to, .. } if to == mode))
+            .map(|e| e.t_s)
+            .unwrap()
+    };
+    let explored_s = entered(FlightMode::Return) - entered(FlightMode::Explore);
+    assert!((explored_s - 3.0).abs() < 0.01, "{explored_s}");
+}
+
+#[test]
+fn failsafes_kill_switch_and_takeover_act_during_a_mission_as_in_hold() {
+    // Lidar lost: hold on the IMU (not chasing the setpoints), then land where it is.
+    let mut c = Companion::new();
+    c.goal = Some(Goal::Velocity([0.3, 0.0]));
+    let mut f = explore(17, &mut c);
+    fly(&mut f, &mut c, 1.0, |_, _| {});
+    f.veh.lidar_on = false;
+    fly(&mut f, &mut c, 1.5, |_, _| {});
+    assert_eq!(
+        (f.out.mode, f.out.failsafe),
+        (FlightMode::Explore, Some(FailsafeReason::LidarLost))
+    );
+    let held = f.veh.position_m;
+    fly(&mut f, &mut c, 0.4, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Explore);
+    let moved = hypotf(f.veh.position_m.x - held.x, f.veh.position_m.y - held.y);
+    assert!(
+        moved < 0.15,
+        "kept flying the setpoints on the IMU: {moved} m"
+    );
+    fly(&mut f, &mut c, 0.5, |_, _| {});
+    assert_eq!(
+        (f.out.mode, f.out.failsafe),
+        (FlightMode::Land, Some(FailsafeReason::LidarLost))
+    );
+
+    // Manual takeover and hand-back: the pilot gets a hold, not the mission again.
+    let mut c = Companion::new();
+    c.goal = Some(Goal::Velocity([0.3, 0.0]));
+    let mut f = explore(18, &mut c);
+    f.veh.pilot.manual = true;
+    f.veh.pilot.throttle_norm = 0.35;
+    fly(&mut f, &mut c, 0.5, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Manual);
+    f.veh.pilot.manual = false;
+    fly(&mut f, &mut c, 1.0, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Hold);
+
+    // Kill switch: motors stop on the step it is seen.
+    let mut c = Companion::new();
+    c.goal = Some(Goal::Velocity([0.3, 0.0]));
+    let mut f = explore(19, &mut c);
+    f.veh.pilot.kill = true;
+    fly(&mut f, &mut c, 0.002, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Killed);
+    assert_eq!(f.out.motors.throttle_norm, [0.0; 4]);
+}
