@@ -8,10 +8,11 @@ use super::events::EventKind;
 use super::mission::{transition, Energy, Mission, MissionConfig, MissionStatus};
 use super::test_vehicle::TestVehicle;
 use super::tests::{config, Flight};
+use crate::estimate::pose_fix::CompanionFrame;
 use crate::geom::{Pose2, Vec2};
 use crate::msgs::{
-    CompanionMessages, CompanionSetpoint, FailsafeReason, FlightMode, Inputs, MissionCommand,
-    Outputs, PoseFix, SetpointTarget,
+    CompanionMessages, CompanionSetpoint, EstimatedState, FailsafeReason, FlightMode, Inputs,
+    MissionCommand, Outputs, PoseFix, SetpointTarget,
 };
 use libm::hypotf;
 use std::vec::Vec;
@@ -242,7 +243,7 @@ fn the_energy_budget_turns_back_before_the_margin_is_used() {
             ..CompanionMessages::default()
         };
         // A long step settles the smoothed voltage at once.
-        m.observe(&msgs, Some(v), 10.0);
+        m.observe(0.0, &msgs, Some(v), 10.0);
     };
     assert_eq!(away(&m).energy, Energy::Unknown);
     // Full pack, 20 m home: plenty.
@@ -277,7 +278,7 @@ fn the_energy_budget_turns_back_before_the_margin_is_used() {
         path_home_m: Some(f32::NAN),
         ..CompanionMessages::default()
     };
-    m.observe(&bad, None, 0.002);
+    m.observe(0.0, &bad, None, 0.002);
     assert_eq!(m.counters().bad_path_home, 1);
     assert_eq!(away(&m).energy, Energy::Short);
     // Without a mission nothing moves the hold.
@@ -417,4 +418,28 @@ fn failsafes_kill_switch_and_takeover_act_during_a_mission_as_in_hold() {
     fly(&mut f, &mut c, 0.002, |_, _| {});
     assert_eq!(f.out.mode, FlightMode::Killed);
     assert_eq!(f.out.motors.throttle_norm, [0.0; 4]);
+}
+
+#[test]
+fn setpoints_age_by_the_autopilot_clock() {
+    let mut m = Mission::new(MissionConfig::default());
+    let (frame, e) = (CompanionFrame::default(), EstimatedState::default());
+    let at = |t_s| CompanionMessages {
+        setpoint: Some(CompanionSetpoint {
+            t_s,
+            target: SetpointTarget::Position {
+                position_m: [1.0, 2.0],
+                yaw_rad: 0.5,
+            },
+        }),
+        ..CompanionMessages::default()
+    };
+    // Stamped an hour ahead (a companion clock gone wrong): refused, and the vehicle holds.
+    m.observe(10.0, &at(3610.0), None, 0.002);
+    assert_eq!(m.counters().bad_setpoints, 1);
+    assert_eq!(m.target(10.0, &frame, &e, 1.5, false), [0.0; 3]);
+    // A little ahead: flown, and stale a timeout after it arrived, not after its stamp.
+    m.observe(20.0, &at(20.3), None, 0.002);
+    assert_eq!(m.target(20.5, &frame, &e, 1.5, false), [1.0, 2.0, 0.5]);
+    assert_eq!(m.target(20.7, &frame, &e, 1.5, false), [0.0; 3]);
 }
