@@ -201,7 +201,6 @@ fn a_door_wider_than_the_threshold_is_taken() {
 fn a_door_narrower_than_the_vehicle_is_flown_past() {
     let pose = Pose2::new(0.2, 0.0, 0.0);
     let (cmd, g) = step(&wall_with_door(Some(0.6)), pose, GuidanceMode::WallFollow);
-    let closed = wall_follow(&wall_with_door(None), pose);
     println!(
         "door 0.6 m: gaps {:?}, v {:?}",
         g.walls().gaps(),
@@ -218,16 +217,15 @@ fn a_door_narrower_than_the_vehicle_is_flown_past() {
     {
         assert!(g.walls().gaps()[k].width_m >= 1.0);
     }
-    let dv = Vec2::new(
-        cmd.velocity_world_m_s[0] - closed.velocity_world_m_s[0],
-        cmd.velocity_world_m_s[1] - closed.velocity_world_m_s[1],
-    );
-    assert!(
-        dv.norm() < 0.01,
-        "{:?} vs {:?}",
-        cmd.velocity_world_m_s,
-        closed.velocity_world_m_s
-    );
+    // Wherever the door is, ahead, abeam or behind across the start of the sweep (x 1.8 and
+    // 2.2 put it there), the command is the unbroken wall's, to a centimetre per second.
+    for x in [0.2f32, 0.6, 1.0, 1.4, 1.8, 2.2, 2.6] {
+        let pose = Pose2::new(x, 0.0, 0.0);
+        let door = wall_follow(&wall_with_door(Some(0.6)), pose).velocity_world_m_s;
+        let closed = wall_follow(&wall_with_door(None), pose).velocity_world_m_s;
+        let dv = Vec2::new(door[0] - closed[0], door[1] - closed[1]);
+        assert!(dv.norm() < 0.01, "x {x}: {door:?} vs {closed:?}");
+    }
 }
 
 #[test]
@@ -375,4 +373,48 @@ fn size_of_the_guidance_state() {
     let s = std::mem::size_of::<Guidance<64>>();
     println!("Guidance<64>: {s} bytes");
     assert!(s <= 8 * 1024, "{s}");
+}
+
+#[test]
+fn a_single_wall_is_followed_forward_at_about_r_goal() {
+    // Seed 002, Fig. 3: along a straight wall the field moves the vehicle forward and corrects
+    // its distance. The wall's oblique beams pull toward it (eq. 1), so the distance settles a
+    // little inside r_goal (1.2 m): between 0.9 m and 1.2 m.
+    let world = vec![wall((-50.0, -1.2), (50.0, -1.2))];
+    for (distance, toward_wall) in [
+        (1.8f32, true),
+        (1.5, true),
+        (1.2, true),
+        (0.9, false),
+        (0.7, false),
+    ] {
+        let c = wall_follow(&world, Pose2::new(0.0, distance - 1.2, 0.0));
+        let [vx, vy] = c.velocity_world_m_s;
+        println!("{distance} m from the wall: v = ({vx:.3}, {vy:.3})");
+        assert!(vx > 0.2, "{distance}: {vx}");
+        assert_eq!(vy < 0.0, toward_wall, "{distance}: {vy}");
+        assert!(matches!(
+            c.decision.outcome,
+            Outcome::WallFollow(HeadingRule::FollowWall { gap: None, .. })
+        ));
+    }
+}
+
+#[test]
+fn a_corridor_across_the_nose_is_still_flown_along() {
+    // A vehicle that does not turn to its heading (an all-round lidar needs no turning) sees
+    // the corridor's walls ahead of and behind it: it still keeps to the middle and moves
+    // along the corridor, never toward a wall.
+    let world = corridor(2.0);
+    for yaw in [PI / 2.0, -PI / 2.0, 2.0, PI] {
+        for y in [-0.3f32, 0.0, 0.3] {
+            let cmd = wall_follow(&world, Pose2::new(0.0, y, yaw));
+            let [vx, vy] = cmd.velocity_world_m_s;
+            println!("yaw {yaw:.2} y {y:+.1}: v = ({vx:.3}, {vy:.3})");
+            assert!(cmd.decision.centred, "{:?}", cmd.decision);
+            assert!((cmd.decision.free_width_m.unwrap() - 2.0).abs() < 0.01);
+            assert!(vx.abs() >= 0.39, "along the corridor: {vx}");
+            assert!((vy + y).abs() < 1e-3, "toward the middle: {vy}");
+        }
+    }
 }

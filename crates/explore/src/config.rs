@@ -10,6 +10,10 @@ pub struct ExploreConfig {
     pub grid: GridConfig,
     /// Beams are drawn into the live map up to this range, m (the slam command's map range).
     pub map_range_m: f32,
+    /// Most keyframes a rebuild of the live map (after loop closure moved the poses) inserts
+    /// per scan; the old map serves until the rebuild is complete. The building survey's 923
+    /// keyframes took 50 ms in one go on a loaded machine; at 50 a scan they take 19 scans.
+    pub rebuild_keyframes_per_scan: usize,
     /// Side of a planning cell, m: a whole multiple of the grid's resolution. Planning on
     /// 10 cm cells visits a quarter of the 5 cm cells and still passes a 1.2 m door.
     pub plan_cell_m: f32,
@@ -27,6 +31,14 @@ pub struct ExploreConfig {
     /// The plan is renewed at most this often while the map only grows, s (planning costs a
     /// pass over the map; the goal being reached or seen renews it at once).
     pub replan_interval_s: f32,
+    /// Plans look for the nearest frontier within a square of this half-side round the
+    /// vehicle first, m (the XV-11's range: the frontier just uncovered is usually there), and
+    /// over the whole map only when the square holds none, so a plan's work does not grow
+    /// with the building.
+    pub plan_window_m: f32,
+    /// The whole map's planning grid (coverage, the way home) is made again at most this
+    /// often while the map only grows, s; a plan that needs it makes it at once.
+    pub full_map_interval_s: f32,
     /// The goal counts as reached within this distance, m.
     pub goal_reached_m: f32,
     /// A goal pursued this long without being reached or seen is given up as unreachable
@@ -49,12 +61,15 @@ impl Default for ExploreConfig {
         Self {
             grid: GridConfig::default(),
             map_range_m: 25.0,
+            rebuild_keyframes_per_scan: 50,
             plan_cell_m: 0.1,
             vehicle_radius_m: 0.35,
             clearance_margin_m: 0.05,
             min_frontier_m: 0.4,
             lookahead_m: 1.0,
             replan_interval_s: 1.0,
+            plan_window_m: 6.0,
+            full_map_interval_s: 10.0,
             goal_reached_m: 0.3,
             goal_timeout_s: 30.0,
             unreachable_radius_m: 0.5,
@@ -99,6 +114,7 @@ impl ExploreConfig {
             ("vehicle_radius_m", self.vehicle_radius_m),
             ("lookahead_m", self.lookahead_m),
             ("goal_reached_m", self.goal_reached_m),
+            ("plan_window_m", self.plan_window_m),
             ("goal_timeout_s", self.goal_timeout_s),
             ("coverage_stall_s", self.coverage_stall_s),
         ];
@@ -113,6 +129,7 @@ impl ExploreConfig {
             ("clearance_margin_m", self.clearance_margin_m),
             ("min_frontier_m", self.min_frontier_m),
             ("replan_interval_s", self.replan_interval_s),
+            ("full_map_interval_s", self.full_map_interval_s),
             ("unreachable_radius_m", self.unreachable_radius_m),
             ("coverage_growth_m2", self.coverage_growth_m2),
             ("no_frontier_confirm_s", self.no_frontier_confirm_s),
@@ -123,6 +140,11 @@ impl ExploreConfig {
                     "{name} is {v}; it must be finite and not negative"
                 )));
             }
+        }
+        if self.rebuild_keyframes_per_scan == 0 {
+            return Err(ConfigError(
+                "rebuild_keyframes_per_scan is 0; it must be at least 1".into(),
+            ));
         }
         let r = self.grid.resolution_m;
         let ratio = self.plan_cell_m / r;

@@ -42,10 +42,20 @@ pub enum DoneReason {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ExploreStats {
     pub plans: usize,
+    /// Plans that found no frontier in the window round the vehicle and searched the whole
+    /// map.
+    pub full_map_plans: usize,
     pub goals_given_up: usize,
     pub map_rebuilds: usize,
-    /// Known free area at the last plan, m².
+    /// Known free area when the whole map was last planned on, m².
     pub known_free_m2: f32,
+}
+
+/// The planning grid of the whole map and when it was made.
+struct FullGrid {
+    made_s: f64,
+    version: u64,
+    grid: PlanGrid,
 }
 
 /// The current goal and the path to it.
@@ -56,13 +66,14 @@ struct Plan {
     map_version: u64,
     /// When this goal (or one within the unreachable radius of it) was first chosen.
     pursued_since_s: f64,
+    /// The window round the vehicle held no frontier; the plan is over the whole map.
+    whole_map: bool,
 }
 
 pub struct Explorer {
     config: ExploreConfig,
     map: LiveMap,
-    /// The planning grid and the map version it was made from.
-    plan_grid: Option<(u64, PlanGrid)>,
+    full: Option<FullGrid>,
     home: Option<Vec2>,
     now_s: f64,
     plan: Option<Plan>,
@@ -73,18 +84,24 @@ pub struct Explorer {
     coverage: (f32, f64),
     no_frontier_since: Option<f64>,
     done: Option<DoneReason>,
+    /// The last finite position `next` was given.
+    last_position: Option<Vec2>,
     stats: ExploreStats,
 }
 
 impl Explorer {
     pub fn new(config: ExploreConfig) -> Result<Self, ConfigError> {
         config.validate()?;
-        let map = LiveMap::new(config.grid, config.map_range_m)
-            .map_err(|e| ConfigError(format!("grid: {e}")))?;
+        let map = LiveMap::new(
+            config.grid,
+            config.map_range_m,
+            config.rebuild_keyframes_per_scan,
+        )
+        .map_err(|e| ConfigError(format!("grid: {e}")))?;
         Ok(Self {
             config,
             map,
-            plan_grid: None,
+            full: None,
             home: None,
             now_s: 0.0,
             plan: None,
@@ -93,6 +110,7 @@ impl Explorer {
             coverage: (0.0, f64::NAN),
             no_frontier_since: None,
             done: None,
+            last_position: None,
             stats: ExploreStats::default(),
         })
     }
@@ -109,6 +127,16 @@ impl Explorer {
     /// The take-off point in the map frame: the first pose observed unless set.
     pub fn home(&self) -> Option<Vec2> {
         self.home
+    }
+
+    /// The frontier cell being flown to, map frame (for plots and logs).
+    pub fn goal(&self) -> Option<Vec2> {
+        self.plan.as_ref().map(|p| p.goal)
+    }
+
+    /// The planned path to the goal, from where the vehicle was when it was planned.
+    pub fn path(&self) -> Option<&Path> {
+        self.plan.as_ref().map(|p| &p.path)
     }
 
     pub fn set_home(&mut self, home: Vec2) {
@@ -164,8 +192,12 @@ impl Explorer {
         }
         let p = pose.translation();
         if !p.is_finite() {
-            return ExploreStep::Waypoint(p);
+            // No position to plan from: hold the last finite one (or home) rather than hand a
+            // NaN to the velocity field.
+            return ExploreStep::Waypoint(self.last_position.or(self.home).unwrap_or(Vec2::ZERO));
         }
+        self.last_position = Some(p);
+        self.full_grid(false);
         if self.now_s - self.coverage.1 >= f64::from(self.config.coverage_stall_s) {
             return self.finish(DoneReason::CoverageStalled);
         }
@@ -177,8 +209,16 @@ impl Explorer {
                 self.given_up.push(plan.goal);
                 self.stats.goals_given_up += 1;
             }
+            // A plan that needed the whole map (the frontier is far) is renewed as often as
+            // the whole map's grid, so a long way to a far frontier is not planned anew
+            // every second.
+            let interval = if plan.whole_map {
+                self.config.full_map_interval_s
+            } else {
+                self.config.replan_interval_s
+            };
             let stale = plan.map_version != self.map.version()
-                && self.now_s - plan.made_s >= f64::from(self.config.replan_interval_s);
+                && self.now_s - plan.made_s >= f64::from(interval);
             if reached || seen || late || stale {
                 self.replan(p);
             }
@@ -206,7 +246,7 @@ impl Explorer {
         let home = self.home?;
         let p = pose.translation();
         let reach = self.config.r_min_m() + self.config.plan_cell_m;
-        let g = self.plan_grid();
+        let g = self.full_grid(false);
         let starts = entries(g, p, reach);
         let goals = entries(g, home, reach);
         let found = search(
@@ -218,20 +258,37 @@ impl Explorer {
         Some(Path::through(g, p, &found.cells, Some(home)))
     }
 
-    /// The planning grid of the current map, made again only when the map changed.
-    fn plan_grid(&mut self) -> &PlanGrid {
-        let version = self.map.version();
-        if self.plan_grid.as_ref().is_some_and(|(v, _)| *v != version) {
-            self.plan_grid = None;
+    /// The planning grid of the whole map, made again when the map changed and the grid is
+    /// older than [`ExploreConfig::full_map_interval_s`], or at once if `fresh`. The known
+    /// free area (coverage) is measured on it.
+    fn full_grid(&mut self, fresh: bool) -> &PlanGrid {
+        let (version, now) = (self.map.version(), self.now_s);
+        let interval = f64::from(self.config.full_map_interval_s);
+        if self
+            .full
+            .as_ref()
+            .is_some_and(|f| f.version != version && (fresh || now - f.made_s >= interval))
+        {
+            self.full = None;
         }
-        let (map, config) = (&self.map, &self.config);
+        let (map, config, coverage, stats) =
+            (&self.map, &self.config, &mut self.coverage, &mut self.stats);
         &self
-            .plan_grid
+            .full
             .get_or_insert_with(|| {
-                let grid = PlanGrid::new(map.grid(), config.plan_factor(), config.r_min_m());
-                (version, grid)
+                let grid = PlanGrid::new(map.grid(), config.plan_factor(), config.r_min_m(), None);
+                let free_m2 = grid.free_area_m2();
+                stats.known_free_m2 = free_m2;
+                if free_m2 >= coverage.0 + config.coverage_growth_m2 {
+                    *coverage = (free_m2, now);
+                }
+                FullGrid {
+                    made_s: now,
+                    version,
+                    grid,
+                }
             })
-            .1
+            .grid
     }
 
     /// Whether the planning cell holding `goal` is still a frontier in the live map (checked
@@ -258,33 +315,24 @@ impl Explorer {
         ExploreStep::Done(reason)
     }
 
-    /// Chooses the nearest reachable frontier and plans to it.
+    /// Chooses the nearest reachable frontier and plans to it: first within the window round
+    /// the vehicle, and over the whole map when the window holds none.
     fn replan(&mut self, p: Vec2) {
         self.stats.plans += 1;
-        let now = self.now_s;
-        let version = self.map.version();
-        let config = self.config;
-        let given_up = std::mem::take(&mut self.given_up);
-        let g = self.plan_grid();
-        let free_m2 = g.free_area_m2();
-        let min_cells = (config.min_frontier_m / config.plan_cell_m).ceil() as usize;
-        let frontiers = clusters(g, min_cells);
-        let wanted = |k: usize| {
-            frontiers.cluster_of[k] != NO_CLUSTER
-                && given_up
-                    .iter()
-                    .all(|&q| (g.center(k) - q).norm() > config.unreachable_radius_m)
-        };
-        let starts = entries(g, p, config.r_min_m() + config.plan_cell_m);
-        let found = search(g, &starts, wanted, |_| 0.0);
-        let plan = found.map(|f| {
-            let goal = g.center(*f.cells.last().unwrap_or(&0));
-            (goal, Path::through(g, p, &f.cells, None))
-        });
-        self.given_up = given_up;
-        self.stats.known_free_m2 = free_m2;
-        if free_m2 >= self.coverage.0 + config.coverage_growth_m2 {
-            self.coverage = (free_m2, now);
+        let (now, version, config) = (self.now_s, self.map.version(), self.config);
+        let window = PlanGrid::new(
+            self.map.grid(),
+            config.plan_factor(),
+            config.r_min_m(),
+            Some((p, config.plan_window_m)),
+        );
+        let mut plan = nearest_frontier(&window, p, &config, &self.given_up);
+        let whole_map = plan.is_none();
+        if whole_map {
+            self.stats.full_map_plans += 1;
+            let given_up = std::mem::take(&mut self.given_up);
+            plan = nearest_frontier(self.full_grid(true), p, &config, &given_up);
+            self.given_up = given_up;
         }
         match plan {
             Some((goal, path)) => {
@@ -300,6 +348,7 @@ impl Explorer {
                     made_s: now,
                     map_version: version,
                     pursued_since_s,
+                    whole_map,
                 });
                 self.no_frontier_since = None;
                 self.last_empty = None;
@@ -314,4 +363,26 @@ impl Explorer {
             }
         }
     }
+}
+
+/// The nearest frontier cell by path over `g` from `p` that belongs to a cluster big enough
+/// and lies clear of every goal given up, with the path to it.
+fn nearest_frontier(
+    g: &PlanGrid,
+    p: Vec2,
+    config: &ExploreConfig,
+    given_up: &[Vec2],
+) -> Option<(Vec2, Path)> {
+    let min_cells = (config.min_frontier_m / config.plan_cell_m).ceil() as usize;
+    let frontiers = clusters(g, min_cells);
+    let wanted = |k: usize| {
+        frontiers.cluster_of[k] != NO_CLUSTER
+            && given_up
+                .iter()
+                .all(|&q| (g.center(k) - q).norm() > config.unreachable_radius_m)
+    };
+    let starts = entries(g, p, config.r_min_m() + config.plan_cell_m);
+    let found = search(g, &starts, wanted, |_| 0.0)?;
+    let goal = g.center(*found.cells.last()?);
+    Some((goal, Path::through(g, p, &found.cells, None)))
 }

@@ -26,7 +26,7 @@ pub const NO_CLUSTER: u32 = u32::MAX;
 /// Whether cell `k` is a frontier: free, with an unknown cell above, below, left or right.
 /// (The diagonal is left out: behind a wall's corner it would make every corner a frontier.)
 pub fn is_frontier(g: &PlanGrid, k: usize) -> bool {
-    if g.state(k) != CellState::Free {
+    if g.state(k) != CellState::Free || !g.in_core(k) {
         return false;
     }
     let (i, j) = g.coords(k);

@@ -23,9 +23,10 @@ impl Path {
     }
 
     /// The path from `start` through the centres of `cells` (a search's result) to `end` if
-    /// given. Corners are dropped while the straight line that replaces them stays on safe
-    /// cells, so the length is that of the shortest path to within a cell rather than the
-    /// grid's eight-direction detour. A leg from a start or end point that is not on a safe
+    /// given, pulled taut over the safe cells: the grid's eight-direction zig-zag straightened
+    /// and its corners rounded the way a string round a post is, so the length is that of
+    /// the shortest path to within a cell. The path stays on safe cells, so it comes no
+    /// closer to a mapped obstacle than `r_min` less half a cell's diagonal. A leg from a start or end point that is not on a safe
     /// cell is kept as it is: it is the way out to safe space.
     pub fn through(g: &PlanGrid, start: Vec2, cells: &[usize], end: Option<Vec2>) -> Self {
         let safe_at = |p: Vec2| g.index_of(p).is_some_and(|k| g.is_safe(k));
@@ -41,16 +42,11 @@ impl Path {
         let first = usize::from(!start_safe);
         let last = points.len() - 1 - usize::from(end.is_some() && !end_safe);
         let clear = |a: Vec2, b: Vec2| g.segment_clear(a, b, |k| g.is_safe(k));
-        let mut out: Vec<Vec2> = points[..=first].to_vec();
-        let mut i = first;
-        while i < last {
-            let mut j = i + 1;
-            while j < last && clear(points[i], points[j + 1]) {
-                j += 1;
-            }
-            out.push(points[j]);
-            i = j;
-        }
+        let mut inner = shortcut(&points[first..=last], clear);
+        tighten(&mut inner, g.cell_m(), clear);
+        let inner = shortcut(&inner, clear);
+        let mut out: Vec<Vec2> = points[..first].to_vec();
+        out.extend_from_slice(&inner);
         out.extend_from_slice(&points[last + 1..]);
         out.dedup();
         Self::new(out)
@@ -97,6 +93,63 @@ impl Path {
         }
         self.waypoints.last().copied().unwrap_or(Vec2::ZERO)
     }
+}
+
+/// The corners of `points` that remain when each kept corner is joined to the farthest later
+/// one in sight (round a wall's end the grid's corners come in and out of view, so the search
+/// runs from the far end).
+fn shortcut(points: &[Vec2], clear: impl Fn(Vec2, Vec2) -> bool) -> Vec<Vec2> {
+    let Some(&first) = points.first() else {
+        return Vec::new();
+    };
+    let mut out = vec![first];
+    let mut i = 0;
+    while i + 1 < points.len() {
+        let j = (i + 2..points.len())
+            .rev()
+            .find(|&j| clear(points[i], points[j]))
+            .unwrap_or(i + 1);
+        out.push(points[j]);
+        i = j;
+    }
+    out
+}
+
+/// Rounds the corners of a polyline whose ends stay put: each leg is cut into pieces of about
+/// two cells, then every inner point moves toward the middle of its neighbours as far as its
+/// two legs stay in sight. Points on a straight leg do not move; at a corner they slide inward
+/// until the legs touch the unsafe cells, which is where the shortest path runs.
+fn tighten(points: &mut Vec<Vec2>, cell_m: f32, clear: impl Fn(Vec2, Vec2) -> bool) {
+    const ROUNDS: usize = 24;
+    let piece = 2.0 * cell_m;
+    let mut dense = Vec::with_capacity(points.len() * 4);
+    for w in points.windows(2) {
+        let n = ((w[1] - w[0]).norm() / piece).ceil().max(1.0) as usize;
+        dense.extend((0..n).map(|k| w[0] + (w[1] - w[0]) * (k as f32 / n as f32)));
+    }
+    dense.extend(points.last());
+    for _ in 0..ROUNDS {
+        let mut moved = false;
+        for k in 1..dense.len().saturating_sub(1) {
+            let (a, p, b) = (dense[k - 1], dense[k], dense[k + 1]);
+            let step = (a + b) * 0.5 - p;
+            if step.norm() < 1e-3 * cell_m {
+                continue;
+            }
+            for fraction in [1.0, 0.5, 0.25] {
+                let q = p + step * fraction;
+                if clear(a, q) && clear(q, b) {
+                    dense[k] = q;
+                    moved = true;
+                    break;
+                }
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    *points = dense;
 }
 
 #[cfg(test)]

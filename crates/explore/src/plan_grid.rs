@@ -20,33 +20,81 @@ pub struct PlanGrid {
     states: Vec<CellState>,
     safe: Vec<bool>,
     free_cells: usize,
+    /// Width of the border that is never safe and never a frontier, cells.
+    margin: usize,
 }
 
 impl PlanGrid {
-    /// The planning grid of `grid` with cells of `factor` map cells a side, one unknown cell
-    /// of border all round (so the map's edge is a frontier), and obstacles grown by `r_min_m`.
-    pub fn new(grid: &OccupancyGrid, factor: i32, r_min_m: f32) -> Self {
+    /// The planning grid of `grid` with cells of `factor` map cells a side and obstacles
+    /// grown by `r_min_m`: over the whole map, or only over the square of half-side `half_m`
+    /// round `centre` when a window is given (planning work then stays bounded however large
+    /// the map grows). A border of cells wide enough to hold every obstacle that reaches in
+    /// lies round the planned area: it is never safe and never a frontier, so the edge of a
+    /// window is not taken for the edge of the map, while the map's own edge still is.
+    pub fn new(
+        grid: &OccupancyGrid,
+        factor: i32,
+        r_min_m: f32,
+        window: Option<(Vec2, f32)>,
+    ) -> Self {
         let cell_m = grid.frame().resolution_m() * factor as f32;
         let Some(bounds) = grid.bounds() else {
             return Self::unknown(cell_m);
         };
         let coarse = |c: Cell| Cell::new(c.i.div_euclid(factor), c.j.div_euclid(factor));
-        let (lo, hi) = (coarse(bounds.min), coarse(bounds.max));
-        let origin = Cell::new(lo.i - 1, lo.j - 1);
-        let width = (hi.i - lo.i + 3) as usize;
-        let height = (hi.j - lo.j + 3) as usize;
+        let (mut lo, mut hi) = (coarse(bounds.min), coarse(bounds.max));
+        if let Some((centre, half_m)) = window {
+            let at = |v: f32| (v / cell_m).floor().clamp(-1e9, 1e9) as i32;
+            let half = (half_m / cell_m).ceil().min(1e9) as i32;
+            let (ci, cj) = (at(centre.x), at(centre.y));
+            lo = Cell::new(lo.i.max(ci - half), lo.j.max(cj - half));
+            hi = Cell::new(hi.i.min(ci + half), hi.j.min(cj + half));
+            if lo.i > hi.i || lo.j > hi.j {
+                return Self::unknown(cell_m);
+            }
+        }
+        let margin = (r_min_m / cell_m).ceil() as i32 + 1;
+        let origin = Cell::new(lo.i - margin, lo.j - margin);
+        let width = (hi.i - lo.i + 1 + 2 * margin) as usize;
+        let height = (hi.j - lo.j + 1 + 2 * margin) as usize;
         let mut states = vec![CellState::Unknown; width * height];
-        for j in bounds.min.j..=bounds.max.j {
-            for i in bounds.min.i..=bounds.max.i {
-                let c = coarse(Cell::new(i, j));
-                let k = (c.j - origin.j) as usize * width + (c.i - origin.i) as usize;
+        let fine_lo = Cell::new(
+            (origin.i * factor).max(bounds.min.i),
+            (origin.j * factor).max(bounds.min.j),
+        );
+        let fine_hi = Cell::new(
+            ((origin.i + width as i32) * factor - 1).min(bounds.max.i),
+            ((origin.j + height as i32) * factor - 1).min(bounds.max.j),
+        );
+        for j in fine_lo.j..=fine_hi.j {
+            let row = (j.div_euclid(factor) - origin.j) as usize * width;
+            for i in fine_lo.i..=fine_hi.i {
+                let k = row + (i.div_euclid(factor) - origin.i) as usize;
                 states[k] = merge(states[k], grid.state(Cell::new(i, j)));
             }
         }
         let mut plan = Self::from_states(origin, width, height, cell_m, states)
             .unwrap_or_else(|| Self::unknown(cell_m));
         plan.inflate(r_min_m);
+        plan.set_border(margin as usize);
         plan
+    }
+
+    /// Makes the outer `margin` cells all round unsafe and no frontier.
+    fn set_border(&mut self, margin: usize) {
+        self.margin = margin;
+        for k in 0..self.states.len() {
+            if !self.in_core(k) {
+                self.safe[k] = false;
+            }
+        }
+    }
+
+    /// Whether cell `k` lies inside the border (see [`Self::new`]).
+    pub fn in_core(&self, k: usize) -> bool {
+        let (i, j) = (k % self.width, k / self.width);
+        let m = self.margin;
+        i >= m && j >= m && i + m < self.width && j + m < self.height
     }
 
     /// One unknown cell: the plan of an empty map.
@@ -59,6 +107,7 @@ impl PlanGrid {
             states: vec![CellState::Unknown],
             safe: vec![false],
             free_cells: 0,
+            margin: 0,
         }
     }
 
@@ -85,6 +134,7 @@ impl PlanGrid {
             states,
             safe,
             free_cells,
+            margin: 0,
         })
     }
 
@@ -143,7 +193,7 @@ impl PlanGrid {
         self.safe[k]
     }
 
-    /// Known free area, m².
+    /// Known free area in the planned area and its border, m².
     pub fn free_area_m2(&self) -> f32 {
         self.free_cells as f32 * self.cell_m * self.cell_m
     }
@@ -179,19 +229,66 @@ impl PlanGrid {
         )
     }
 
-    /// Whether every point of the segment lies in a cell that passes `ok` (sampled every
-    /// quarter cell: a path may clip the corner of a cell by less than that, which the
-    /// clearance of safe cells absorbs).
+    /// Whether every cell the segment passes through passes `ok` (an exact walk along the
+    /// segment, cell by cell: a piece of a clear segment is clear too).
     pub fn segment_clear(&self, a: Vec2, b: Vec2, ok: impl Fn(usize) -> bool) -> bool {
-        let steps = ((b - a).norm() / (0.25 * self.cell_m)).ceil() as usize;
-        (0..=steps).all(|s| {
-            let t = if steps == 0 {
-                0.0
+        let local = |p: Vec2| {
+            Vec2::new(
+                p.x / self.cell_m - self.origin.i as f32,
+                p.y / self.cell_m - self.origin.j as f32,
+            )
+        };
+        let (a, b) = (local(a), local(b));
+        let limit = (self.width + self.height) as f32;
+        let inside = |p: Vec2| p.is_finite() && p.x.abs() < limit && p.y.abs() < limit;
+        if !(inside(a) && inside(b)) {
+            return false;
+        }
+        let (mut i, mut j) = (a.x.floor() as i32, a.y.floor() as i32);
+        let end = (b.x.floor() as i32, b.y.floor() as i32);
+        let d = b - a;
+        // Along the segment (0..1): where the next column and row boundaries are crossed, and
+        // how far apart the crossings are.
+        let axis = |from: f32, cell: i32, delta: f32| -> (i32, f32, f32) {
+            if delta > 0.0 {
+                (1, (cell as f32 + 1.0 - from) / delta, 1.0 / delta)
+            } else if delta < 0.0 {
+                (-1, (from - cell as f32) / -delta, -1.0 / delta)
             } else {
-                s as f32 / steps as f32
-            };
-            self.index_of(a + (b - a) * t).is_some_and(&ok)
-        })
+                (0, f32::INFINITY, f32::INFINITY)
+            }
+        };
+        let (si, mut next_x, step_x) = axis(a.x, i, d.x);
+        let (sj, mut next_y, step_y) = axis(a.y, j, d.y);
+        // Through a cell corner (within a thousandth of a cell) both cells beside the corner
+        // count as touched: a piece of the segment, computed with other rounding, then checks
+        // the same cells.
+        let tie = 1e-3 / d.norm().max(1e-6);
+        let cell_ok = |i: i32, j: i32| self.index(i, j).is_some_and(&ok);
+        let steps = (end.0 - i).unsigned_abs() + (end.1 - j).unsigned_abs();
+        for _ in 0..steps {
+            if !cell_ok(i, j) {
+                return false;
+            }
+            if (i, j) == end {
+                break;
+            }
+            if (next_x - next_y).abs() < tie && si != 0 && sj != 0 {
+                if !(cell_ok(i + si, j) && cell_ok(i, j + sj)) {
+                    return false;
+                }
+                (i, j) = (i + si, j + sj);
+                next_x += step_x;
+                next_y += step_y;
+            } else if next_x < next_y {
+                i += si;
+                next_x += step_x;
+            } else {
+                j += sj;
+                next_y += step_y;
+            }
+        }
+        self.index(i, j).is_some_and(&ok) && self.index(end.0, end.1).is_some_and(&ok)
     }
 }
 

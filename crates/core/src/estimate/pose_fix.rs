@@ -39,8 +39,9 @@ pub struct PoseFixConfig {
     /// Factor on the fix's covariance: the SLAM and the onboard odometry match the same scans,
     /// so their errors are correlated and the fix must not count as independent evidence.
     pub covariance_scale: f32,
-    /// Fixes older than this (s) when they arrive are refused; younger ones are compared with
-    /// the pose taken back along the velocity by their age.
+    /// Fixes older than this (s) when they arrive, or from further in the future (a companion
+    /// clock gone wrong), are refused; the others are compared with the pose taken back along
+    /// the velocity by their age.
     pub max_latency_s: f32,
 }
 
@@ -67,7 +68,7 @@ pub struct PoseFixCounters {
     pub invalid: u32,
     /// Lost (no quality) or below `min_quality_pct`.
     pub low_quality: u32,
-    /// Older than `max_latency_s`.
+    /// Timed more than `max_latency_s` from their arrival, either way.
     pub late: u32,
     /// Times the map frame was (re-)anchored: the first fix, each `reset_counter` change, and
     /// each run of `reset_after_rejections` gate rejections.
@@ -129,7 +130,7 @@ impl CompanionFrame {
             count(&mut self.counters.low_quality);
             return FixOutcome::Refused;
         }
-        if age_s.is_nan() || age_s > c.max_latency_s {
+        if age_s.is_nan() || age_s.abs() > c.max_latency_s {
             count(&mut self.counters.late);
             return FixOutcome::Refused;
         }
@@ -343,8 +344,10 @@ mod tests {
         assert_eq!(late, FixOutcome::Refused);
         let nan_age = frame.fuse(&mut ekf, &PoseFixConfig::default(), &good, f32::NAN, 10);
         assert_eq!(nan_age, FixOutcome::Refused);
+        let future = frame.fuse(&mut ekf, &PoseFixConfig::default(), &good, -1e6, 10);
+        assert_eq!(future, FixOutcome::Refused);
         assert_eq!((*ekf.state(), *ekf.covariance()), before);
         let c = frame.counters();
-        assert_eq!((c.invalid, c.low_quality, c.late, c.accepted), (7, 2, 2, 0));
+        assert_eq!((c.invalid, c.low_quality, c.late, c.accepted), (7, 2, 3, 0));
     }
 }

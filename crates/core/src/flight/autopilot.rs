@@ -218,7 +218,8 @@ impl Autopilot {
             .body_rates(finite_or_zero(inputs.imu.gyro_rad_s));
 
         // ---- supervise: modes and failsafes ----
-        self.mission.observe(&inputs.companion, battery_v, dt);
+        self.mission
+            .observe(inputs.t_s, &inputs.companion, battery_v, dt);
         let frame = *self.estimator.companion_frame();
         if matches!(
             self.mode,

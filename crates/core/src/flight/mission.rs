@@ -125,10 +125,12 @@ pub struct MissionStatus {
     pub at_home: bool,
 }
 
-/// Companion inputs that were refused (non-finite setpoints or path lengths).
+/// Companion inputs that were refused, and the steps spent holding for want of a setpoint.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MissionCounters {
+    /// Non-finite, or timed more than `setpoint_timeout_s` from the step that received it.
     pub bad_setpoints: u32,
+    /// Non-finite or negative path-home lengths.
     pub bad_path_home: u32,
     /// Steps flown holding because the setpoint was stale.
     pub stale_steps: u32,
@@ -164,15 +166,20 @@ impl Mission {
         &self.counters
     }
 
-    /// Takes in what arrived this step; `battery_v` is a finite reading or `None`.
-    pub fn observe(&mut self, m: &CompanionMessages, battery_v: Option<f32>, dt: f32) {
+    /// Takes in what arrived at `t_s`; `battery_v` is a finite reading or `None`.
+    pub fn observe(&mut self, t_s: f64, m: &CompanionMessages, battery_v: Option<f32>, dt: f32) {
         match m.command {
             Some(MissionCommand::StartExplore) => self.start_requested = true,
             Some(MissionCommand::ExploreDone) => self.done = true,
             None => {}
         }
-        if let Some(sp) = m.setpoint {
-            if setpoint_is_finite(&sp) {
+        if let Some(mut sp) = m.setpoint {
+            // A setpoint already stale, or from further in the future than that (a companion
+            // clock gone wrong), is refused; one from the future ages from its arrival, so a
+            // companion that stops talking is noticed whatever its clock says.
+            let age_s = (t_s - sp.t_s) as f32;
+            if setpoint_is_finite(&sp) && age_s.abs() <= self.config.setpoint_timeout_s {
+                sp.t_s = sp.t_s.min(t_s);
                 self.setpoint = Some(sp);
             } else {
                 self.counters.bad_setpoints = self.counters.bad_setpoints.saturating_add(1);
@@ -190,14 +197,17 @@ impl Mission {
         }
     }
 
-    /// Mode entry: a new mission mode starts its clock and forgets the last leg's setpoint; a
-    /// landing or a disarm ends the mission.
+    /// Mode entry: a new mission mode starts its clock and forgets the last leg's setpoint;
+    /// exploring takes up the start request (a hold after a manual takeover waits for a new
+    /// one); a disarm ends the mission.
     pub fn enter(&mut self, mode: FlightMode, t_s: f64) {
         self.mode_since_t_s = t_s;
         self.setpoint = None;
         self.stale_hold = None;
-        if mode == FlightMode::Disarmed {
-            *self = Self::new(self.config);
+        match mode {
+            FlightMode::Explore => self.start_requested = false,
+            FlightMode::Disarmed => *self = Self::new(self.config),
+            _ => {}
         }
     }
 

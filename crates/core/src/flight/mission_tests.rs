@@ -8,10 +8,11 @@ use super::events::EventKind;
 use super::mission::{transition, Energy, Mission, MissionConfig, MissionStatus};
 use super::test_vehicle::TestVehicle;
 use super::tests::{config, Flight};
+use crate::estimate::pose_fix::CompanionFrame;
 use crate::geom::{Pose2, Vec2};
 use crate::msgs::{
-    CompanionMessages, CompanionSetpoint, FailsafeReason, FlightMode, Inputs, MissionCommand,
-    Outputs, PoseFix, SetpointTarget,
+    CompanionMessages, CompanionSetpoint, EstimatedState, FailsafeReason, FlightMode, Inputs,
+    MissionCommand, Outputs, PoseFix, SetpointTarget,
 };
 use libm::hypotf;
 use std::vec::Vec;
@@ -242,7 +243,7 @@ fn the_energy_budget_turns_back_before_the_margin_is_used() {
             ..CompanionMessages::default()
         };
         // A long step settles the smoothed voltage at once.
-        m.observe(&msgs, Some(v), 10.0);
+        m.observe(0.0, &msgs, Some(v), 10.0);
     };
     assert_eq!(away(&m).energy, Energy::Unknown);
     // Full pack, 20 m home: plenty.
@@ -277,7 +278,7 @@ fn the_energy_budget_turns_back_before_the_margin_is_used() {
         path_home_m: Some(f32::NAN),
         ..CompanionMessages::default()
     };
-    m.observe(&bad, None, 0.002);
+    m.observe(0.0, &bad, None, 0.002);
     assert_eq!(m.counters().bad_path_home, 1);
     assert_eq!(away(&m).energy, Energy::Short);
     // Without a mission nothing moves the hold.
@@ -345,4 +346,100 @@ fn bad_pose_fixes_are_refused_and_counted_in_flight() {
     let fixes = f.ap.companion_frame().counters();
     assert_eq!((fixes.invalid, fixes.accepted), (10, accepted), "{fixes:?}");
     assert_eq!(f.out.mode, FlightMode::Explore);
+}
+
+#[test]
+fn the_time_budget_ends_exploring() {
+    let mut c = Companion::new();
+    c.goal = Some(Goal::Point([0.3, 0.0]));
+    let mut cfg = config();
+    cfg.mission.explore_budget_s = 3.0;
+    let mut f = Flight::new(cfg, 16);
+    fly(&mut f, &mut c, 0.2, |_, _| {});
+    f.veh.pilot.arm = true;
+    c.command = Some(MissionCommand::StartExplore);
+    fly(&mut f, &mut c, 10.0, |_, _| {});
+    assert_eq!((f.out.mode, f.out.failsafe), (FlightMode::Return, None));
+    let entered = |mode| {
+        f.ap.events()
+            .iter()
+            .find(|e| matches!(e.kind, EventKind::ModeChange { to, .. } if to == mode))
+            .map(|e| e.t_s)
+            .unwrap()
+    };
+    let explored_s = entered(FlightMode::Return) - entered(FlightMode::Explore);
+    assert!((explored_s - 3.0).abs() < 0.01, "{explored_s}");
+}
+
+#[test]
+fn failsafes_kill_switch_and_takeover_act_during_a_mission_as_in_hold() {
+    // Lidar lost: hold on the IMU (not chasing the setpoints), then land where it is.
+    let mut c = Companion::new();
+    c.goal = Some(Goal::Velocity([0.3, 0.0]));
+    let mut f = explore(17, &mut c);
+    fly(&mut f, &mut c, 1.0, |_, _| {});
+    f.veh.lidar_on = false;
+    fly(&mut f, &mut c, 1.5, |_, _| {});
+    assert_eq!(
+        (f.out.mode, f.out.failsafe),
+        (FlightMode::Explore, Some(FailsafeReason::LidarLost))
+    );
+    let held = f.veh.position_m;
+    fly(&mut f, &mut c, 0.4, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Explore);
+    let moved = hypotf(f.veh.position_m.x - held.x, f.veh.position_m.y - held.y);
+    assert!(
+        moved < 0.15,
+        "kept flying the setpoints on the IMU: {moved} m"
+    );
+    fly(&mut f, &mut c, 0.5, |_, _| {});
+    assert_eq!(
+        (f.out.mode, f.out.failsafe),
+        (FlightMode::Land, Some(FailsafeReason::LidarLost))
+    );
+
+    // Manual takeover and hand-back: the pilot gets a hold, not the mission again.
+    let mut c = Companion::new();
+    c.goal = Some(Goal::Velocity([0.3, 0.0]));
+    let mut f = explore(18, &mut c);
+    f.veh.pilot.manual = true;
+    f.veh.pilot.throttle_norm = 0.35;
+    fly(&mut f, &mut c, 0.5, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Manual);
+    f.veh.pilot.manual = false;
+    fly(&mut f, &mut c, 1.0, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Hold);
+
+    // Kill switch: motors stop on the step it is seen.
+    let mut c = Companion::new();
+    c.goal = Some(Goal::Velocity([0.3, 0.0]));
+    let mut f = explore(19, &mut c);
+    f.veh.pilot.kill = true;
+    fly(&mut f, &mut c, 0.002, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Killed);
+    assert_eq!(f.out.motors.throttle_norm, [0.0; 4]);
+}
+
+#[test]
+fn setpoints_age_by_the_autopilot_clock() {
+    let mut m = Mission::new(MissionConfig::default());
+    let (frame, e) = (CompanionFrame::default(), EstimatedState::default());
+    let at = |t_s| CompanionMessages {
+        setpoint: Some(CompanionSetpoint {
+            t_s,
+            target: SetpointTarget::Position {
+                position_m: [1.0, 2.0],
+                yaw_rad: 0.5,
+            },
+        }),
+        ..CompanionMessages::default()
+    };
+    // Stamped an hour ahead (a companion clock gone wrong): refused, and the vehicle holds.
+    m.observe(10.0, &at(3610.0), None, 0.002);
+    assert_eq!(m.counters().bad_setpoints, 1);
+    assert_eq!(m.target(10.0, &frame, &e, 1.5, false), [0.0; 3]);
+    // A little ahead: flown, and stale a timeout after it arrived, not after its stamp.
+    m.observe(20.0, &at(20.3), None, 0.002);
+    assert_eq!(m.target(20.5, &frame, &e, 1.5, false), [1.0, 2.0, 0.5]);
+    assert_eq!(m.target(20.7, &frame, &e, 1.5, false), [0.0; 3]);
 }

@@ -20,7 +20,8 @@ pub struct GuidanceConfig {
     /// and a 4 m lidar still sees the opposite side of a corridor from there.
     pub r_goal_m: f32,
     /// Velocity gain `K_v` of seed 002 eq. 2, m²/s (each beam adds a unit vector divided by a
-    /// distance in m). Default 1.5 m²/s: about 0.3 m/s along a single wall at `r_goal`.
+    /// distance in m). Default 1.5 m²/s: along a single wall at `r_goal` seen by 360 beams the
+    /// field reaches the speed limit; 1.2 m from the long wall of a 6 m x 4 m room, 0.43 m/s.
     pub k_v_m2_s: f32,
     /// How much `K_v` grows as the nearest range falls from `r_goal` to `r_min`: the gain is
     /// `K_v (1 + boost · s)` with `s` going linearly from 0 to 1. Dimensionless, default 2.0 (three

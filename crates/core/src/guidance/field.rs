@@ -11,11 +11,11 @@
 //! across the gap, so an opening the vehicle cannot use never pulls it in.
 
 use super::config::GuidanceConfig;
-use super::prls::{usable, WallSegments};
+use super::prls::WallSegments;
+use super::sweep::Sweep;
+use crate::fast_math::sin_cos;
 use crate::geom::Vec2;
-use crate::scan::Scan;
 use core::f32::consts::{FRAC_PI_2, PI};
-use libm::{cosf, sinf};
 
 /// Which part of the field is summed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,9 +42,9 @@ pub struct FieldSum {
     pub narrow_gaps: usize,
 }
 
-/// Sums the field over `scan`; `None` when no beam is usable.
-pub fn field_sum<const N: usize, const S: usize>(
-    scan: &Scan<N>,
+/// Sums the field over the sweep; `None` when no beam is usable.
+pub(super) fn field_sum<const N: usize, const S: usize>(
+    sweep: &Sweep<N>,
     walls: &WallSegments<S>,
     cfg: &GuidanceConfig,
     part: FieldPart,
@@ -52,17 +52,13 @@ pub fn field_sum<const N: usize, const S: usize>(
     let mut sum = Vec2::ZERO;
     let mut n = 0usize;
     let mut nearest = f32::INFINITY;
-    let narrow_gaps = for_each_effective_beam(scan, walls, cfg, |angle, range| {
+    let narrow_gaps = for_each_effective_beam(sweep, walls, cfg, |ray, range| {
         let w = 1.0 / (range - cfg.r_min_m()).abs().max(cfg.weight_floor_m);
-        let (s, c) = (sinf(angle), cosf(angle));
-        let ray = Vec2::new(c, s);
         let push = match part {
-            FieldPart::WallFollow => {
-                let gamma = increment_angle(angle, range, cfg.r_goal_m);
-                Vec2::new(cosf(gamma), sinf(gamma))
-            }
+            // γ − θ of eq. 1, applied as a rotation of the beam's own direction.
+            FieldPart::WallFollow => rotate(ray, increment_angle(0.0, range, cfg.r_goal_m)),
             FieldPart::Repulsive if range < cfg.r_goal_m => {
-                ray * (-cosf(FRAC_PI_2 * range / cfg.r_goal_m))
+                ray * -sin_cos(FRAC_PI_2 * range / cfg.r_goal_m).1
             }
             FieldPart::Repulsive => Vec2::ZERO,
         };
@@ -99,49 +95,59 @@ pub fn boosted_gain(nearest_m: f32, cfg: &GuidanceConfig) -> f32 {
     cfg.k_v_m2_s * (1.0 + cfg.k_v_boost * closeness)
 }
 
-/// Calls `f(angle, range)` for every usable beam, and for every beam inside a gap narrower than
-/// `min_gap_width_m` with the range to the chord across the gap where that is nearer.
-/// Returns how many narrow gaps shortened at least one beam (openings flown past).
+/// Calls `f(direction, range)` for every usable beam, and for every beam inside a gap
+/// narrower than `min_gap_width_m` with the range to the chord across the gap where that is
+/// nearer. Returns how many narrow gaps shortened at least one beam (openings flown past).
 fn for_each_effective_beam<const N: usize, const S: usize>(
-    scan: &Scan<N>,
+    sweep: &Sweep<N>,
     walls: &WallSegments<S>,
     cfg: &GuidanceConfig,
-    mut f: impl FnMut(f32, f32),
+    mut f: impl FnMut(Vec2, f32),
 ) -> usize {
-    let beams = scan.beams();
-    let narrow = || {
-        walls
-            .gaps()
-            .iter()
-            .filter(|g| g.width_m < cfg.min_gap_width_m)
-    };
+    let mut narrow = [None; S];
+    let mut narrow_len = 0;
+    for g in walls
+        .gaps()
+        .iter()
+        .filter(|g| g.width_m < cfg.min_gap_width_m)
+    {
+        narrow[narrow_len] = Some(g);
+        narrow_len += 1;
+    }
+    let narrow = &narrow[..narrow_len];
     let mut used = [false; S];
-    for pos in 0..walls.sweep_len() {
-        let beam = &beams[walls.beam_index(pos)];
-        let mut range = if usable(beam) {
-            beam.range_m
+    for pos in 0..sweep.len() {
+        let ray = sweep.unit(pos);
+        let mut range = if sweep.is_usable(pos) {
+            sweep.range_m(pos)
         } else {
             f32::INFINITY
         };
-        for g in narrow().filter(|g| g.narrowest_pos[0] < pos && pos < g.narrowest_pos[1]) {
-            let [a, b] = g.narrowest_m;
-            if let Some(chord) = ray_hits_chord(beam.angle_rad, a, b) {
-                if chord < range - cfg.line_tolerance_m {
-                    used[g.after] = true;
+        for g in narrow.iter().flatten() {
+            if g.spans(pos) {
+                let [a, b] = g.narrowest_m;
+                if let Some(chord) = ray_hits_chord(ray, a, b) {
+                    if chord < range - cfg.line_tolerance_m {
+                        used[g.after] = true;
+                    }
+                    range = range.min(chord);
                 }
-                range = range.min(chord);
             }
         }
-        if range.is_finite() && beam.angle_rad.is_finite() {
-            f(beam.angle_rad, range);
+        if range.is_finite() && ray != Vec2::ZERO {
+            f(ray, range);
         }
     }
     used.iter().filter(|&&u| u).count()
 }
 
-/// Range along the ray at `angle_rad` from the sensor to the segment `a`-`b`, if it crosses it.
-fn ray_hits_chord(angle_rad: f32, a: Vec2, b: Vec2) -> Option<f32> {
-    let dir = Vec2::new(cosf(angle_rad), sinf(angle_rad));
+fn rotate(v: Vec2, angle_rad: f32) -> Vec2 {
+    let (s, c) = sin_cos(angle_rad);
+    Vec2::new(c * v.x - s * v.y, s * v.x + c * v.y)
+}
+
+/// Range along the unit ray `dir` from the sensor to the segment `a`-`b`, if it crosses it.
+fn ray_hits_chord(dir: Vec2, a: Vec2, b: Vec2) -> Option<f32> {
     let e = b - a;
     let denom = dir.cross(e);
     if denom.abs() < 1e-9 {
@@ -150,4 +156,64 @@ fn ray_hits_chord(angle_rad: f32, a: Vec2, b: Vec2) -> Option<f32> {
     let t = a.cross(e) / denom;
     let u = a.cross(dir) / denom;
     (t > 0.0 && (-1e-3..=1.0 + 1e-3).contains(&u)).then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scan::{Beam, Scan};
+    use core::f32::consts::FRAC_PI_2;
+
+    fn close(a: f32, b: f32) -> bool {
+        (crate::geom::normalize_angle(a - b)).abs() < 1e-5
+    }
+
+    #[test]
+    fn eq1_turns_each_beam_by_its_range() {
+        let rg = 1.2;
+        // A hit at r_goal on the right pushes straight ahead; on the left, straight back.
+        assert!(close(increment_angle(-FRAC_PI_2, rg, rg), 0.0));
+        assert!(close(increment_angle(FRAC_PI_2, rg, rg), PI));
+        // Touching: straight away from the hit. At 2 r_goal and beyond: toward it (no jump).
+        assert!(close(increment_angle(0.3, 0.0, rg), 0.3 + PI));
+        assert!(close(increment_angle(0.3, 2.0 * rg, rg), 0.3));
+        assert!(close(increment_angle(0.3, 5.0, rg), 0.3));
+    }
+
+    #[test]
+    fn the_gain_rises_from_r_goal_to_r_min() {
+        let cfg = GuidanceConfig::default();
+        let k = cfg.k_v_m2_s;
+        assert_eq!(boosted_gain(3.0, &cfg), k);
+        assert_eq!(boosted_gain(cfg.r_goal_m, &cfg), k);
+        assert!((boosted_gain(cfg.r_min_m(), &cfg) - 3.0 * k).abs() < 1e-5);
+        assert!((boosted_gain(0.5 * (cfg.r_goal_m + cfg.r_min_m()), &cfg) - 2.0 * k).abs() < 1e-4);
+        assert!((boosted_gain(0.1, &cfg) - 3.0 * k).abs() < 1e-5);
+    }
+
+    #[test]
+    fn eq2_on_one_beam_is_k_v_over_the_distance_beyond_r_min() {
+        let cfg = GuidanceConfig::default();
+        let mut scan: Scan<4> = Scan::new(0.0);
+        scan.push(Beam::new(-FRAC_PI_2, cfg.r_goal_m)).unwrap();
+        scan.push(Beam::invalid(0.0)).unwrap();
+        let sweep = Sweep::new(&scan, cfg.rule_start_rad);
+        let walls = WallSegments::<4>::default();
+        let f = field_sum(&sweep, &walls, &cfg, FieldPart::WallFollow).unwrap();
+        let expected = cfg.k_v_m2_s / (cfg.r_goal_m - cfg.r_min_m());
+        assert_eq!(f.beams, 1);
+        assert!((f.velocity_m_s.x - expected).abs() < 1e-4, "{f:?}");
+        assert!(f.velocity_m_s.y.abs() < 1e-4, "{f:?}");
+        // The repulsive part of a hit at r_goal is nil; nearer, it points away from the hit.
+        let r = field_sum(&sweep, &walls, &cfg, FieldPart::Repulsive).unwrap();
+        assert!(r.velocity_m_s.norm() < 1e-5, "{r:?}");
+        let mut near: Scan<4> = Scan::new(0.0);
+        near.push(Beam::new(-FRAC_PI_2, 0.7)).unwrap();
+        let sweep = Sweep::new(&near, cfg.rule_start_rad);
+        let r = field_sum(&sweep, &walls, &cfg, FieldPart::Repulsive).unwrap();
+        assert!(
+            r.velocity_m_s.y > 0.5 && r.velocity_m_s.x.abs() < 1e-4,
+            "{r:?}"
+        );
+    }
 }

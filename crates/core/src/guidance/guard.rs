@@ -3,7 +3,7 @@
 //! the command. Safety-critical.
 
 use super::config::GuidanceConfig;
-use super::prls::usable;
+use super::sweep::{usable, Sweep};
 use crate::geom::Vec2;
 use crate::scan::Scan;
 use libm::{cosf, sinf};
@@ -25,23 +25,27 @@ pub fn allowed_approach_m_s(range_m: f32, cfg: &GuidanceConfig) -> f32 {
 }
 
 /// Removes from `v` (sensor frame, m/s) what exceeds the allowed approach speed to any hit.
-pub fn guard_velocity<const N: usize>(
+pub(super) fn guard_velocity<const N: usize>(
     v: Vec2,
-    scan: &Scan<N>,
+    sweep: &Sweep<N>,
     cfg: &GuidanceConfig,
 ) -> (Vec2, Guard) {
+    let hits = || {
+        (0..sweep.len())
+            .filter(|&pos| sweep.is_usable(pos))
+            .map(|pos| (sweep.unit(pos), sweep.range_m(pos)))
+    };
     // Each correction only shortens `v`, so hits whose allowance exceeds the current speed can
-    // never be violated and are skipped cheaply.
+    // never be violated and are skipped.
     let mut out = v;
     let mut touched = false;
     for _ in 0..3 {
         let mut changed = false;
-        for b in scan.beams().iter().filter(|b| usable(b)) {
-            let limit = allowed_approach_m_s(b.range_m, cfg);
+        for (u, range) in hits() {
+            let limit = allowed_approach_m_s(range, cfg);
             if limit * limit >= out.norm_squared() {
                 continue;
             }
-            let u = Vec2::new(cosf(b.angle_rad), sinf(b.angle_rad));
             let toward = out.dot(u);
             if toward > limit {
                 out = out - u * (toward - limit);
@@ -53,7 +57,7 @@ pub fn guard_velocity<const N: usize>(
             break;
         }
     }
-    if !respects_every_hit(out, scan, cfg) {
+    if !respects(out, hits(), cfg) {
         return (Vec2::ZERO, Guard::Stopped);
     }
     let action = if touched {
@@ -64,10 +68,48 @@ pub fn guard_velocity<const N: usize>(
     (out, action)
 }
 
-/// True when `v` approaches no hit faster than allowed (to 0.1 mm/s).
+/// True when `v` (sensor frame, m/s) approaches no hit of `scan` faster than allowed (to
+/// 0.1 mm/s): the guard's promise, checkable from outside.
 pub fn respects_every_hit<const N: usize>(v: Vec2, scan: &Scan<N>, cfg: &GuidanceConfig) -> bool {
-    scan.beams().iter().filter(|b| usable(b)).all(|b| {
-        let u = Vec2::new(cosf(b.angle_rad), sinf(b.angle_rad));
-        v.dot(u) <= allowed_approach_m_s(b.range_m, cfg) + 1e-4
+    let hits = scan.beams().iter().filter(|b| usable(b));
+    respects(
+        v,
+        hits.map(|b| (Vec2::new(cosf(b.angle_rad), sinf(b.angle_rad)), b.range_m)),
+        cfg,
+    )
+}
+
+fn respects(v: Vec2, mut hits: impl Iterator<Item = (Vec2, f32)>, cfg: &GuidanceConfig) -> bool {
+    let speed = v.norm();
+    hits.all(|(u, range)| {
+        let limit = allowed_approach_m_s(range, cfg);
+        limit >= speed || v.dot(u) <= limit + 1e-4
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scan::Beam;
+
+    #[test]
+    fn the_speed_toward_a_near_wall_is_cut_to_the_allowance_and_the_rest_kept() {
+        let cfg = GuidanceConfig::default();
+        let mut scan: Scan<2> = Scan::new(0.0);
+        scan.push(Beam::new(0.0, cfg.r_min_m() + 0.1)).unwrap();
+        let sweep = Sweep::new(&scan, cfg.rule_start_rad);
+        let (v, g) = guard_velocity(Vec2::new(0.4, 0.3), &sweep, &cfg);
+        assert_eq!(g, Guard::Limited);
+        assert!((v.x - 0.1 * cfg.approach_rate_1_s).abs() < 1e-5 && (v.y - 0.3).abs() < 1e-6);
+        // Away from the wall: untouched. Inside r_min: no approach at all.
+        assert_eq!(
+            guard_velocity(Vec2::new(-0.4, 0.3), &sweep, &cfg),
+            (Vec2::new(-0.4, 0.3), Guard::Clear)
+        );
+        let mut inside: Scan<2> = Scan::new(0.0);
+        inside.push(Beam::new(0.0, 0.2)).unwrap();
+        let sweep = Sweep::new(&inside, cfg.rule_start_rad);
+        let (v, _) = guard_velocity(Vec2::new(0.4, 0.0), &sweep, &cfg);
+        assert!(v.x.abs() < 1e-6);
+    }
 }

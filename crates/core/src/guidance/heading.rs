@@ -4,9 +4,10 @@
 //! both sides).
 
 use super::config::GuidanceConfig;
-use super::prls::{relative_angle, usable, WallSegments};
-use crate::scan::Scan;
-use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
+use super::prls::WallSegments;
+use super::sweep::{relative_angle, Sweep};
+use crate::geom::Vec2;
+use core::f32::consts::FRAC_PI_2;
 
 /// What the heading rules concluded from the segments in the rules' window.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,29 +67,42 @@ pub fn choose_heading<const S: usize>(
     }
 }
 
-/// Distances to the nearest hit on the left and on the right (the 90° sectors centred on body
-/// ±y), m; `None` for a side with no hit.
+/// Distances to the nearest hit on either side of an axis (the followed wall's direction, or
+/// body x without one), among hits within 45° of the axis' normals, m; `None` for a side with
+/// no hit. Measured about the axis, not the body, so a vehicle that does not turn to its
+/// heading still sees a corridor's width.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SideClearance {
     pub left_m: Option<f32>,
     pub right_m: Option<f32>,
+    /// The axis, a unit vector in the sensor frame; "left" is its counter-clockwise side.
+    pub axis: Vec2,
 }
 
 impl SideClearance {
-    pub fn measure<const N: usize>(scan: &Scan<N>) -> Self {
+    pub(super) fn measure<const N: usize>(sweep: &Sweep<N>, axis_rad: Option<f32>) -> Self {
+        let axis = axis_rad.map_or(Vec2::new(1.0, 0.0), |a| {
+            Vec2::new(libm::cosf(a), libm::sinf(a))
+        });
         let mut left = f32::INFINITY;
         let mut right = f32::INFINITY;
-        for b in scan.beams().iter().filter(|b| usable(b)) {
-            let a = crate::geom::normalize_angle(b.angle_rad);
-            if (a - FRAC_PI_2).abs() <= FRAC_PI_4 {
-                left = left.min(b.range_m);
-            } else if (a + FRAC_PI_2).abs() <= FRAC_PI_4 {
-                right = right.min(b.range_m);
+        for pos in (0..sweep.len()).filter(|&p| sweep.is_usable(p)) {
+            let u = sweep.unit(pos);
+            let (along, across) = (u.dot(axis), axis.cross(u));
+            if along.abs() > across.abs() {
+                continue;
+            }
+            let lateral = sweep.range_m(pos) * across.abs();
+            if across > 0.0 {
+                left = left.min(lateral);
+            } else {
+                right = right.min(lateral);
             }
         }
         Self {
             left_m: left.is_finite().then_some(left),
             right_m: right.is_finite().then_some(right),
+            axis,
         }
     }
 

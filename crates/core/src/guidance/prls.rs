@@ -15,10 +15,11 @@
 use super::config::GuidanceConfig;
 use super::gaps::measure_gaps;
 pub use super::gaps::Gap;
+use super::run::Run;
+use super::sweep::Sweep;
 use crate::geom::Vec2;
-use crate::scan::{Beam, Scan};
-use core::f32::consts::TAU;
-use libm::{atan2f, cosf, sinf, sqrtf};
+use crate::scan::Scan;
+use libm::{atan2f, sqrtf};
 
 /// A straight piece of wall, in the sensor frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -58,6 +59,7 @@ impl WallSegment {
 pub struct WallSegments<const S: usize> {
     segments: [WallSegment; S],
     gaps: [Gap; S],
+    seam: Option<Gap>,
     len: usize,
     truncated: bool,
     sweep_start: usize,
@@ -69,6 +71,7 @@ impl<const S: usize> Default for WallSegments<S> {
         Self {
             segments: [WallSegment::default(); S],
             gaps: [Gap::default(); S],
+            seam: None,
             len: 0,
             truncated: false,
             sweep_start: 0,
@@ -76,6 +79,9 @@ impl<const S: usize> Default for WallSegments<S> {
         }
     }
 }
+
+/// Most hits past a corner handed from the old wall to the new one.
+const MAX_HANDED_BACK: usize = 3;
 
 impl<const S: usize> WallSegments<S> {
     /// Segments in sweep order (counter-clockwise from `rule_start_rad`).
@@ -86,6 +92,13 @@ impl<const S: usize> WallSegments<S> {
     /// Gaps between consecutive segments; `gaps()[k]` lies between segments `k` and `k + 1`.
     pub fn gaps(&self) -> &[Gap] {
         &self.gaps[..self.len.saturating_sub(1)]
+    }
+
+    /// The gap across the start of the sweep (behind on the right by default), between the last
+    /// segment and the first, when the scan is a full turn. The heading rules do not use it
+    /// (their chain starts there); the field closes it when it is narrow.
+    pub fn seam_gap(&self) -> Option<&Gap> {
+        self.seam.as_ref()
     }
 
     /// True when the scan held more segments than `S`: the later ones were dropped.
@@ -105,97 +118,88 @@ impl<const S: usize> WallSegments<S> {
 
     /// Runs PRLS over `scan` (the configuration must have passed `validate`).
     pub fn extract<const N: usize>(&mut self, scan: &Scan<N>, cfg: &GuidanceConfig) {
-        let beams = scan.beams();
+        self.extract_sweep(&Sweep::new(scan, cfg.rule_start_rad), cfg);
+    }
+
+    /// [`Self::extract`] over a sweep already laid out.
+    pub(super) fn extract_sweep<const N: usize>(&mut self, sweep: &Sweep<N>, cfg: &GuidanceConfig) {
         self.len = 0;
         self.truncated = false;
-        self.beams = beams.len();
-        self.sweep_start = sweep_start(beams, cfg.rule_start_rad);
+        self.beams = sweep.len();
+        self.sweep_start = sweep.beam_index(0);
         let mut run = Run::default();
-        let mut prev: Option<(Vec2, f32)> = None;
-        for pos in 0..beams.len() {
-            let beam = &beams[self.beam_index(pos)];
-            if !usable(beam) {
-                self.close(&mut run, beams, cfg);
-                prev = None;
+        for pos in 0..sweep.len() {
+            let Some(p) = sweep.hit(pos) else {
+                self.close(&mut run, sweep, cfg);
+                continue;
+            };
+            if run.n == 0 {
+                run.push(p, pos);
                 continue;
             }
-            let p = beam.point();
-            let rel = relative_angle(beam.angle_rad, cfg.rule_start_rad);
-            let step_ok = prev.is_some_and(|(_, prev_rel)| {
-                let step = rel - prev_rel;
-                step > 0.0 && step <= cfg.max_beam_step_rad
-            });
-            let far_from_prev = prev.is_some_and(|(q, _)| (p - q).norm() > cfg.max_point_spacing_m);
+            let step = sweep.rel_rad(pos) - sweep.rel_rad(run.last_pos);
+            let step_ok = step > 0.0 && step <= cfg.max_beam_step_rad;
+            let off_line = run.off_line(p, cfg);
             // A wall seen at a grazing angle has hits far apart but on one line, with no beam
             // passing between them: an established line bridges the spacing.
-            let breaks = if prev.is_none() {
-                false
-            } else if !step_ok {
-                true
-            } else if run.established(cfg) {
-                run.off_line(p, cfg)
-            } else {
-                far_from_prev || run.off_line(p, cfg)
-            };
-            if breaks && step_ok && run.off_line(p, cfg) {
-                // The hits just past a corner can lie within tolerance of the old wall; they
-                // are handed to the new wall while they sit clearly off the old one without them.
-                let mut handed = 0;
-                while handed < MAX_HANDED_BACK && run.n >= 3 {
-                    let previous = self.hit(beams, run.last_pos - 1);
-                    match run.split_last(previous) {
-                        (before, Some(q)) if before.is_outlier(q, cfg) => {
-                            run = before;
-                            handed += 1;
-                        }
-                        _ => break,
-                    }
-                }
-                if handed > 0 {
-                    let first_new = run.last_pos + 1;
-                    self.close(&mut run, beams, cfg);
-                    for k in first_new..pos {
-                        run.push(self.hit(beams, k), k);
-                    }
-                    run.push(p, pos);
-                    prev = Some((p, rel));
-                    continue;
-                }
+            let too_far = !run.established(cfg) && (p - run.last).norm() > cfg.max_point_spacing_m;
+            if step_ok && off_line && self.hand_over_corner(&mut run, sweep, cfg) {
+                run.push(p, pos);
+                continue;
             }
-            if breaks {
-                self.close(&mut run, beams, cfg);
+            if !step_ok || off_line || too_far {
+                self.close(&mut run, sweep, cfg);
             }
             run.push(p, pos);
-            prev = Some((p, rel));
         }
-        self.close(&mut run, beams, cfg);
-        self.measure_gaps(scan);
+        self.close(&mut run, sweep, cfg);
+        let n = self.len.saturating_sub(1);
+        let segments = &self.segments[..self.len];
+        self.seam = measure_gaps(segments, &mut self.gaps[..n], sweep, cfg.max_beam_step_rad);
+    }
+
+    /// The hits just past a corner can lie within tolerance of the old wall; they are handed
+    /// to the new wall while they sit clearly off the old one without them. On a hand-over the
+    /// old wall is closed and `run` holds the handed hits; returns whether that happened.
+    fn hand_over_corner<const N: usize>(
+        &mut self,
+        run: &mut Run,
+        sweep: &Sweep<N>,
+        cfg: &GuidanceConfig,
+    ) -> bool {
+        let end = run.last_pos;
+        let mut kept = *run;
+        while end - kept.last_pos < MAX_HANDED_BACK && kept.n >= 3 {
+            match kept.split_last(sweep.point(kept.last_pos - 1)) {
+                (before, Some(q)) if before.is_outlier(q, cfg) => kept = before,
+                _ => break,
+            }
+        }
+        if kept.last_pos == end {
+            return false;
+        }
+        let first_new = kept.last_pos + 1;
+        self.close(&mut kept, sweep, cfg);
+        *run = Run::default();
+        for k in first_new..=end {
+            run.push(sweep.point(k), k);
+        }
+        true
     }
 
     /// Ends the running fit, keeping it as a segment if it is long and populated enough.
-    fn close(&mut self, run: &mut Run, beams: &[Beam], cfg: &GuidanceConfig) {
+    fn close<const N: usize>(&mut self, run: &mut Run, sweep: &Sweep<N>, cfg: &GuidanceConfig) {
         let mut done = core::mem::take(run);
         if done.n == 0 {
             return;
         }
-        self.extend_backward(&mut done, beams, cfg);
-        let hit = |pos: usize| self.hit(beams, pos);
+        self.extend_backward(&mut done, sweep, cfg);
         if done.n >= 4 {
-            done.trim_front(hit(done.first_pos + 1), cfg);
+            done.trim_front(sweep.point(done.first_pos + 1), cfg);
         }
-        let Some(mut seg) = done.segment() else {
+        let Some(seg) = segment(&done, sweep) else {
             return;
         };
-        // The fit quality from the hits themselves: the running sums lose the few millimetres
-        // of residual to rounding on segments many metres long.
-        let normal = Vec2::new(cosf(seg.normal_rad), sinf(seg.normal_rad));
-        let squares: f32 = (seg.first_pos..=seg.last_pos)
-            .map(|pos| {
-                let d = hit(pos).dot(normal) - seg.distance_m;
-                d * d
-            })
-            .sum();
-        seg.rms_residual_m = sqrtf(squares / seg.points as f32);
         if seg.points < usize::from(cfg.min_segment_points)
             || seg.length_m() < cfg.min_segment_length_m
         {
@@ -210,248 +214,58 @@ impl<const S: usize> WallSegments<S> {
         }
     }
 
-    /// The hit at sweep position `pos` (only called for positions inside a run, all usable).
-    fn hit(&self, beams: &[Beam], pos: usize) -> Vec2 {
-        beams[self.beam_index(pos)].point()
-    }
-
     /// A run starts where its hits come close enough together; the hits before that, far apart
     /// on a wall seen at a grazing angle, join it when they lie on its line, so the wall's
     /// far end is not mistaken for clutter narrowing the opening beyond it.
-    fn extend_backward(&self, run: &mut Run, beams: &[Beam], cfg: &GuidanceConfig) {
+    fn extend_backward<const N: usize>(
+        &self,
+        run: &mut Run,
+        sweep: &Sweep<N>,
+        cfg: &GuidanceConfig,
+    ) {
         if !run.established(cfg) {
             return;
         }
         let floor = self.segments().last().map_or(0, |s| s.last_pos + 1);
-        let mut next_rel = relative_angle(
-            beams[self.beam_index(run.first_pos)].angle_rad,
-            cfg.rule_start_rad,
-        );
         while run.first_pos > floor {
             let pos = run.first_pos - 1;
-            let b = &beams[self.beam_index(pos)];
-            let rel = relative_angle(b.angle_rad, cfg.rule_start_rad);
-            let step = next_rel - rel;
-            if !usable(b)
-                || step <= 0.0
-                || step > cfg.max_beam_step_rad
-                || run.off_line(b.point(), cfg)
-            {
-                break;
+            let step = sweep.rel_rad(run.first_pos) - sweep.rel_rad(pos);
+            match sweep.hit(pos) {
+                Some(p) if step > 0.0 && step <= cfg.max_beam_step_rad && !run.off_line(p, cfg) => {
+                    run.prepend(p, pos)
+                }
+                _ => break,
             }
-            run.prepend(b.point(), pos);
-            next_rel = rel;
         }
-    }
-
-    fn measure_gaps<const N: usize>(&mut self, scan: &Scan<N>) {
-        let beams = scan.beams();
-        let (start, len) = (self.sweep_start, self.beams);
-        let hit = |pos: usize| {
-            let b = &beams[(start + pos) % len];
-            usable(b).then(|| b.point())
-        };
-        let n = self.len.saturating_sub(1);
-        measure_gaps(&self.segments[..self.len], &mut self.gaps[..n], len, hit);
     }
 }
 
-/// Most hits past a corner handed from the old wall to the new one.
-const MAX_HANDED_BACK: usize = 3;
-
-/// A beam whose hit can be used: flagged valid and with a finite positive range and angle.
-pub(crate) fn usable(b: &Beam) -> bool {
-    b.valid && b.range_m.is_finite() && b.range_m > 0.0 && b.angle_rad.is_finite()
-}
-
-/// Angle counter-clockwise from `start`, in [0, 2π).
-pub(crate) fn relative_angle(angle_rad: f32, start_rad: f32) -> f32 {
-    let r = libm::fmodf(angle_rad - start_rad, TAU);
-    let r = if r < 0.0 { r + TAU } else { r };
-    // Rounding can land a tiny negative remainder exactly on 2π.
-    if r >= TAU {
-        0.0
-    } else {
-        r
+/// The segment of a run: its line in polar form, its ends projected on it, and the fit
+/// quality from the hits themselves (the running sums lose the few millimetres of residual to
+/// rounding on walls many metres long).
+fn segment<const N: usize>(run: &Run, sweep: &Sweep<N>) -> Option<WallSegment> {
+    let l = run.line()?;
+    let mut normal = l.normal;
+    let mut rho = l.centroid.dot(normal);
+    if rho < 0.0 {
+        normal = normal * -1.0;
+        rho = -rho;
     }
-}
-
-/// The beam first counter-clockwise from `start_rad`: where the sweep begins.
-fn sweep_start(beams: &[Beam], start_rad: f32) -> usize {
-    let mut best = (0, f32::INFINITY);
-    for (i, b) in beams.iter().enumerate() {
-        let rel = if b.angle_rad.is_finite() {
-            relative_angle(b.angle_rad, start_rad)
-        } else {
-            f32::INFINITY
-        };
-        if rel < best.1 {
-            best = (i, rel);
-        }
-    }
-    best.0
-}
-
-/// The running fit: sums of hits relative to the first one (relative sums keep f32 exact
-/// enough far from the sensor), updated one hit at a time.
-#[derive(Clone, Copy, Debug, Default)]
-struct Run {
-    origin: Vec2,
-    first: Vec2,
-    last: Vec2,
-    first_pos: usize,
-    last_pos: usize,
-    n: usize,
-    sx: f32,
-    sy: f32,
-    sxx: f32,
-    sxy: f32,
-    syy: f32,
-}
-
-/// A total least squares line: centroid and unit normal.
-struct Line {
-    centroid: Vec2,
-    normal: Vec2,
-}
-
-impl Run {
-    fn push(&mut self, p: Vec2, pos: usize) {
-        if self.n == 0 {
-            self.origin = p;
-            self.first = p;
-            self.first_pos = pos;
-        }
-        self.add(p, 1.0);
-        self.last = p;
-        self.last_pos = pos;
-    }
-
-    /// Drops the first hit when it is an outlier to the line of the others (the last hit of the
-    /// wall before a corner, taken before the line could judge it); `second` is the next hit.
-    /// Runs of four hits or more only.
-    fn trim_front(&mut self, second: Vec2, cfg: &GuidanceConfig) {
-        let mut rest = *self;
-        rest.add(self.first, -1.0);
-        if rest.is_outlier(self.first, cfg) {
-            rest.first = second;
-            rest.first_pos = self.first_pos + 1;
-            *self = rest;
-        }
-    }
-
-    /// Adds a hit before the first one.
-    fn prepend(&mut self, p: Vec2, pos: usize) {
-        self.add(p, 1.0);
-        self.first = p;
-        self.first_pos = pos;
-    }
-
-    /// Adds (`sign` 1) or removes (`sign` -1) one hit's share of the sums: the recursion.
-    fn add(&mut self, p: Vec2, sign: f32) {
-        let d = p - self.origin;
-        if sign > 0.0 {
-            self.n += 1;
-        } else {
-            self.n -= 1;
-        }
-        self.sx += sign * d.x;
-        self.sy += sign * d.y;
-        self.sxx += sign * d.x * d.x;
-        self.sxy += sign * d.x * d.y;
-        self.syy += sign * d.y * d.y;
-    }
-
-    /// The run without its last hit, and that hit (none for runs of fewer than three hits,
-    /// whose remainder would not be a line); `previous` is the hit before the last.
-    fn split_last(&self, previous: Vec2) -> (Run, Option<Vec2>) {
-        if self.n < 3 {
-            return (*self, None);
-        }
-        let mut before = *self;
-        before.add(self.last, -1.0);
-        before.last = previous;
-        before.last_pos = self.last_pos - 1;
-        (before, Some(self.last))
-    }
-
-    /// True once the run is long enough for its line to judge new hits: a line through a few
-    /// close, noisy hits points anywhere.
-    fn established(&self, cfg: &GuidanceConfig) -> bool {
-        let base = cfg.min_segment_length_m.max(4.0 * cfg.line_tolerance_m);
-        (self.last - self.first).norm() >= base
-    }
-
-    fn line(&self) -> Option<Line> {
-        if self.n < 2 {
-            return None;
-        }
-        let n = self.n as f32;
-        let (mx, my) = (self.sx / n, self.sy / n);
-        let cxx = self.sxx / n - mx * mx;
-        let cyy = self.syy / n - my * my;
-        let cxy = self.sxy / n - mx * my;
-        // The line runs along the principal axis of the hits' scatter; its normal is the
-        // direction of least spread.
-        let dir = 0.5 * atan2f(2.0 * cxy, cxx - cyy);
-        Some(Line {
-            centroid: self.origin + Vec2::new(mx, my),
-            normal: Vec2::new(-sinf(dir), cosf(dir)),
+    let project = |p: Vec2| p - normal * (p.dot(normal) - rho);
+    let squares: f32 = (run.first_pos..=run.last_pos)
+        .map(|pos| {
+            let d = sweep.point(pos).dot(normal) - rho;
+            d * d
         })
-    }
-
-    /// True when `p` lies farther from the line fitted so far than the tolerance.
-    fn off_line(&self, p: Vec2, cfg: &GuidanceConfig) -> bool {
-        self.off_line_by(p, cfg.line_tolerance_m)
-    }
-
-    /// True when `p` sits off the line by more than three times the run's own scatter (at
-    /// least a tenth of the tolerance): a hit of the next wall that the tolerance let in.
-    fn is_outlier(&self, p: Vec2, cfg: &GuidanceConfig) -> bool {
-        let Some(scatter) = self.scatter_m() else {
-            return false;
-        };
-        self.off_line_by(p, (3.0 * scatter).max(0.1 * cfg.line_tolerance_m))
-    }
-
-    /// RMS distance of the run's hits from its line, from the running sums, m.
-    fn scatter_m(&self) -> Option<f32> {
-        if self.n < 3 {
-            return None;
-        }
-        let n = self.n as f32;
-        let (mx, my) = (self.sx / n, self.sy / n);
-        let cxx = self.sxx / n - mx * mx;
-        let cyy = self.syy / n - my * my;
-        let cxy = self.sxy / n - mx * my;
-        let half = 0.5 * (cxx - cyy);
-        let least = 0.5 * (cxx + cyy) - sqrtf(half * half + cxy * cxy);
-        Some(sqrtf(least.max(0.0)))
-    }
-
-    fn off_line_by(&self, p: Vec2, tolerance_m: f32) -> bool {
-        self.line()
-            .is_some_and(|l| (p - l.centroid).dot(l.normal).abs() > tolerance_m)
-    }
-
-    fn segment(&self) -> Option<WallSegment> {
-        let l = self.line()?;
-        let mut normal = l.normal;
-        let mut rho = l.centroid.dot(normal);
-        if rho < 0.0 {
-            normal = Vec2::new(-normal.x, -normal.y);
-            rho = -rho;
-        }
-        let project = |p: Vec2| p - normal * (p.dot(normal) - rho);
-        Some(WallSegment {
-            start_m: project(self.first),
-            end_m: project(self.last),
-            normal_rad: atan2f(normal.y, normal.x),
-            distance_m: rho,
-            rms_residual_m: 0.0,
-            points: self.n,
-            first_pos: self.first_pos,
-            last_pos: self.last_pos,
-        })
-    }
+        .sum();
+    Some(WallSegment {
+        start_m: project(run.first),
+        end_m: project(run.last),
+        normal_rad: atan2f(normal.y, normal.x),
+        distance_m: rho,
+        rms_residual_m: sqrtf(squares / run.n as f32),
+        points: run.n,
+        first_pos: run.first_pos,
+        last_pos: run.last_pos,
+    })
 }

@@ -7,11 +7,12 @@
 use super::config::{GuidanceConfig, GuidanceConfigError};
 use super::field::{field_sum, FieldPart, FieldSum};
 use super::guard::{guard_velocity, Guard};
-use super::heading::{choose_heading, HeadingChoice, HeadingRule, SideClearance};
+use super::heading::{choose_heading, HeadingRule, SideClearance};
 use super::prls::WallSegments;
+use super::sweep::Sweep;
 use crate::geom::{normalize_angle, Pose2, Vec2};
 use crate::scan::Scan;
-use libm::{atan2f, cosf, sinf};
+use libm::atan2f;
 
 /// What the guidance is asked to do.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,7 +43,8 @@ pub enum Outcome {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Decision {
     pub outcome: Outcome,
-    /// Free width across the vehicle (nearest hit left + right), m.
+    /// Free width across the way ahead (nearest hit on either side of the followed wall's
+    /// direction, or of the way to the waypoint), m.
     pub free_width_m: Option<f32>,
     /// True when the free width is under twice `r_goal` and the vehicle keeps to the middle.
     pub centred: bool,
@@ -110,38 +112,37 @@ impl<const S: usize> Guidance<S> {
                 return hover(Outcome::InvalidWaypoint, None);
             }
         }
-        self.walls.extract(scan, &cfg);
+        let sweep = Sweep::new(scan, cfg.rule_start_rad);
+        self.walls.extract_sweep(&sweep, &cfg);
         let part = match mode {
             GuidanceMode::WallFollow => FieldPart::WallFollow,
             GuidanceMode::TowardWaypoint { .. } => FieldPart::Repulsive,
         };
-        let Some(field) = field_sum(scan, &self.walls, &cfg, part) else {
+        let Some(field) = field_sum(&sweep, &self.walls, &cfg, part) else {
             return hover(Outcome::NoUsableBeams, None);
         };
-        let sides = SideClearance::measure(scan);
-        let (wish_body, yaw_body, outcome, centred) = match mode {
+        let (wish_body, yaw_body, outcome, sides, centred) = match mode {
             GuidanceMode::WallFollow => {
                 let choice = choose_heading(&self.walls, &cfg);
+                let sides = SideClearance::measure(&sweep, choice.body_rad);
                 let centred = sides.is_narrow(&cfg);
                 let v = if centred {
-                    centred_velocity(&sides, &choice, &cfg)
+                    centred_velocity(&sides, &cfg)
                 } else {
                     field.velocity_m_s
                 };
-                (
-                    v,
-                    choice.body_rad,
-                    Outcome::WallFollow(choice.rule),
-                    centred,
-                )
+                let outcome = Outcome::WallFollow(choice.rule);
+                (v, choice.body_rad, outcome, sides, centred)
             }
             GuidanceMode::TowardWaypoint { world_m } => {
                 let (v, yaw, dist) = toward(pose, world_m, &field, &cfg);
-                (v, yaw, Outcome::TowardWaypoint { distance_m: dist }, false)
+                let sides = SideClearance::measure(&sweep, yaw);
+                let outcome = Outcome::TowardWaypoint { distance_m: dist };
+                (v, yaw, outcome, sides, false)
             }
         };
         let (limited, speed_limited) = limit_speed(wish_body, cfg.max_speed_m_s);
-        let (safe, guard) = guard_velocity(limited, scan, &cfg);
+        let (safe, guard) = guard_velocity(limited, &sweep, &cfg);
         let world = pose.rotate(safe);
         GuidanceCommand {
             velocity_world_m_s: [world.x, world.y],
@@ -180,25 +181,16 @@ fn hover(outcome: Outcome, nearest_range_m: Option<f32>) -> GuidanceCommand {
 /// Seed 002, Fig. 5: in a passage narrower than twice `r_goal`, equal distance to both sides
 /// while moving along the followed wall. The along-wall part never has a component across the
 /// passage, so it cannot push into either side.
-fn centred_velocity(sides: &SideClearance, choice: &HeadingChoice, cfg: &GuidanceConfig) -> Vec2 {
+fn centred_velocity(sides: &SideClearance, cfg: &GuidanceConfig) -> Vec2 {
     let (Some(left), Some(right)) = (sides.left_m, sides.right_m) else {
         return Vec2::ZERO;
     };
-    // Along the passage: the followed wall's direction. Across it: its normal on the body's
-    // left, so the error (left − right) moves the vehicle toward the side with more room.
-    let along = choice
-        .body_rad
-        .map_or(Vec2::ZERO, |a| Vec2::new(cosf(a), sinf(a)));
-    let across = match along.perp() {
-        n if n.y < 0.0 => n * -1.0,
-        n if n == Vec2::ZERO => Vec2::new(0.0, 1.0),
-        n => n,
-    };
-    // Centring comes first; the speed left under the limit goes along the passage.
+    // Centring comes first, across the axis toward the side with more room; the speed left
+    // under the limit goes along the axis (the followed wall's direction).
     let lateral_m_s =
         (cfg.centring_gain_1_s * 0.5 * (left - right)).clamp(-cfg.max_speed_m_s, cfg.max_speed_m_s);
     let spare = libm::sqrtf(cfg.max_speed_m_s * cfg.max_speed_m_s - lateral_m_s * lateral_m_s);
-    along * cfg.cruise_speed_m_s.min(spare) + across * lateral_m_s
+    sides.axis * cfg.cruise_speed_m_s.min(spare) + sides.axis.perp() * lateral_m_s
 }
 
 /// Toward a waypoint: attraction capped at the cruise speed plus the field's repulsive part.
