@@ -44,7 +44,8 @@ pub struct SimArgs {
     /// Vehicle preset (f450, pelican) or a TOML file (`base = "..."` plus overrides).
     #[arg(long, default_value = "f450")]
     pub vehicle: String,
-    /// Run length of the closed-loop scenarios (default 60) and of the test pilot's `hold`;
+    /// Run length of the closed-loop scenarios (default 60; `explore` 600, and it plans its way
+    /// home to be down by then) and of the test pilot's `hold`;
     /// an upper bound on the flight for `survey`, s. Valid range: (0, 86400].
     #[arg(long, value_parser = within::<f64>(Range::above(0.0, 86400.0)))]
     pub duration: Option<f64>,
