@@ -3,8 +3,8 @@
 //! of the reachable area over time (`explored.png`).
 
 use super::outputs::create;
-use super::plot::{stacked_panels, Line};
-use crate::plot::{fonts_available, write_png};
+use super::plot::{stacked_panels, world_canvas, world_chart, Line};
+use crate::plot::write_png;
 use crate::report::CliError;
 use plotters::coord::ReverseCoordTranslate;
 use plotters::prelude::*;
@@ -82,32 +82,8 @@ fn map_view(
     states: &[StateSample],
 ) -> Result<(), Box<dyn Error>> {
     let world = &config.world;
-    let [x0, y0, x1, y1] = world.bounds();
-    let (w, h) = (x1 - x0, y1 - y0);
-    let px = 1200u32;
-    let py = ((f64::from(px) * h / w.max(1e-3)).round() as u32).clamp(200, 2400);
-    let root = BitMapBackend::new(path, (px, py)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let labels = fonts_available();
-    let mut builder = ChartBuilder::on(&root);
-    builder.margin(10);
-    if labels {
-        builder
-            .caption(
-                format!(
-                    "{}: the vehicle's map, flown path, true walls (m)",
-                    world.name
-                ),
-                ("sans-serif", 20),
-            )
-            .x_label_area_size(30)
-            .y_label_area_size(40);
-    }
-    let m = 0.5;
-    let mut chart = builder.build_cartesian_2d(x0 - m..x1 + m, y0 - m..y1 + m)?;
-    if labels {
-        chart.configure_mesh().disable_mesh().draw()?;
-    }
+    let root = world_canvas(path, world, 1200)?;
+    let mut chart = world_chart(&root, world, "the vehicle's map, flown path, true walls")?;
     // Each pixel shows the map cell under it, so the map is drawn whole at any scale.
     let map = &exploration.map;
     let [mx, my, myaw] = exploration.map_in_world;
