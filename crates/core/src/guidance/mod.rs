@@ -6,8 +6,7 @@
 //! returns a world-frame velocity and heading plus what the rules decided. It knows nothing of
 //! flight modes; the autopilot or a companion computer calls it once per revolution. Memory:
 //! `size_of::<Guidance<S>>()` (12 KB for 64 segments, 4 KB of it the near-hit memory) plus
-//! about 6 KB of stack a step for
-//! a 360-beam scan.
+//! about 6 KB of stack a step for a 360-beam scan.
 //!
 //! Safety: whatever the rules and the field ask, the last stage ([`guard`]) limits the speed
 //! toward every hit to `approach_rate · (r − r_min)`, so no command closes on a wall inside
