@@ -249,7 +249,9 @@ pub struct Outputs {
 /// (a re-anchoring on every `reset_counter` change), so the two need not share an origin.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PoseFix {
-    /// Time the pose belongs to (the scan's time), on the autopilot's clock.
+    /// Time the pose belongs to, on the autopilot's clock: for a revolution deskewed to
+    /// mid-revolution (as the onboard odometry does), the middle of the revolution, not its
+    /// first beam; the fix is compared with the estimate taken back to this time.
     pub t_s: f64,
     /// Position in the companion's map frame (m).
     pub position_m: [f32; 2],

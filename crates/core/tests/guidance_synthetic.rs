@@ -372,7 +372,7 @@ fn toward_a_waypoint_the_field_still_keeps_clearance() {
 fn size_of_the_guidance_state() {
     let s = std::mem::size_of::<Guidance<64>>();
     println!("Guidance<64>: {s} bytes");
-    assert!(s <= 8 * 1024, "{s}");
+    assert!(s <= 16 * 1024, "{s}");
 }
 
 #[test]
@@ -417,4 +417,38 @@ fn a_corridor_across_the_nose_is_still_flown_along() {
             assert!((vy + y).abs() < 1e-3, "toward the middle: {vy}");
         }
     }
+}
+
+#[test]
+fn a_wall_that_vanishes_from_the_scan_is_remembered_for_a_moment() {
+    // A wall 0.45 m to the right (inside r_min), seen once; the next scans lose it, as a thin
+    // wall's end seen edge-on is lost, while the waypoint lies straight through it.
+    let pose = Pose2::new(0.0, 0.0, 0.0);
+    let far = wall((-5.0, 3.0), (5.0, 3.0));
+    let at = |world: &[Seg], stamp_s: f64| {
+        let mut s = look(world, pose);
+        s.stamp_s = stamp_s;
+        s
+    };
+    let seen = at(&[far, wall((-5.0, -0.45), (5.0, -0.45))], 10.0);
+    let through = GuidanceMode::TowardWaypoint {
+        world_m: [0.0, -3.0],
+    };
+    let fly = |memory_s: f32, lost_at_s: f64| {
+        let cfg = GuidanceConfig {
+            obstacle_memory_s: memory_s,
+            ..GuidanceConfig::default()
+        };
+        let mut g = Guidance::<64>::new(cfg).unwrap();
+        g.step(&seen, pose, through);
+        g.step(&at(&[far], lost_at_s), pose, through)
+            .velocity_world_m_s[1]
+    };
+    // Remembered: no approach at all (the wall is inside r_min).
+    assert!(fly(1.0, 10.2) >= -1e-4, "{}", fly(1.0, 10.2));
+    // Forgotten after the memory's second, or with no memory: straight on at cruise speed.
+    assert!((fly(1.0, 11.3) + 0.4).abs() < 1e-3, "{}", fly(1.0, 11.3));
+    assert!((fly(0.0, 10.2) + 0.4).abs() < 1e-3, "{}", fly(0.0, 10.2));
+    // A clock that runs backwards starts the memory afresh.
+    assert!((fly(1.0, 9.0) + 0.4).abs() < 1e-3, "{}", fly(1.0, 9.0));
 }

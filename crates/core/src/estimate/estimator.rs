@@ -175,8 +175,8 @@ impl Estimator {
 
     /// Fuses a companion pose fix that arrived `age_s` after its time ([`super::pose_fix`]).
     pub fn fuse_pose_fix(&mut self, fix: &PoseFix, age_s: f32) -> FixOutcome {
-        let (c, limit) = (self.config.pose_fix, self.config.ekf.reset_after_rejections);
-        let outcome = self.companion.fuse(&mut self.ekf, &c, fix, age_s, limit);
+        let c = self.config.pose_fix;
+        let outcome = self.companion.fuse(&mut self.ekf, &c, fix, age_s);
         self.feed_back_tilt();
         outcome
     }

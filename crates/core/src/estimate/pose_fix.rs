@@ -14,8 +14,10 @@
 //! the same anchor. The first accepted fix sets the anchor so that it agrees with the current
 //! estimate, and so does every change of the fix's `reset_counter` (the companion re-localised
 //! and its pose jumped): the estimate is never yanked by a jump, and the fixes after it
-//! correct the estimate relative to the new anchor. A long run of gate rejections (the two
-//! frames disagree and neither says why) is treated the same way.
+//! correct the estimate relative to the new anchor. A fix that disagrees with the estimate
+//! without a reset is refused by the gate for as long as it disagrees, and counted: re-anchoring
+//! on it would silently give up the map's correction of the odometry's drift, so a companion
+//! must bump `reset_counter` whenever its pose jumps.
 //!
 //! Refused without touching the filter, and counted: a non-finite value, a covariance that is
 //! not symmetric positive definite or whose one-sigma exceeds the configured bounds, a lost or
@@ -70,11 +72,8 @@ pub struct PoseFixCounters {
     pub low_quality: u32,
     /// Timed more than `max_latency_s` from their arrival, either way.
     pub late: u32,
-    /// Times the map frame was (re-)anchored: the first fix, each `reset_counter` change, and
-    /// each run of `reset_after_rejections` gate rejections.
+    /// Times the map frame was (re-)anchored: the first fix and each `reset_counter` change.
     pub anchors: u32,
-    /// Gate rejections since the last acceptance or anchoring.
-    pub consecutive_rejected: u32,
 }
 
 /// What one fix did.
@@ -94,7 +93,7 @@ pub enum FixOutcome {
 pub struct CompanionFrame {
     /// Map -> world; identity until the first fix.
     map_to_world: Pose2,
-    /// The `reset_counter` the anchor was set for; `None` re-anchors at the next fix.
+    /// The `reset_counter` the anchor was set for; `None` until the first fix.
     reset_counter: Option<u8>,
     counters: PoseFixCounters,
 }
@@ -116,7 +115,6 @@ impl CompanionFrame {
         c: &PoseFixConfig,
         fix: &PoseFix,
         age_s: f32,
-        reanchor_after_rejections: u32,
     ) -> FixOutcome {
         let count = |n: &mut u32| *n = n.saturating_add(1);
         let Some(covariance) = well_formed(c, fix) else {
@@ -146,7 +144,6 @@ impl CompanionFrame {
             );
             self.map_to_world = here.compose(map_pose.inverse());
             self.reset_counter = Some(fix.reset_counter);
-            self.counters.consecutive_rejected = 0;
             count(&mut self.counters.anchors);
             return FixOutcome::Anchored;
         }
@@ -156,17 +153,8 @@ impl CompanionFrame {
         let r = rotate * covariance * rotate.transpose() * c.covariance_scale;
         let outcome = ekf.fuse_pose(world, r, latency_s);
         match outcome {
-            Outcome::Accepted => {
-                count(&mut self.counters.accepted);
-                self.counters.consecutive_rejected = 0;
-            }
-            Outcome::Rejected => {
-                count(&mut self.counters.rejected);
-                count(&mut self.counters.consecutive_rejected);
-                if self.counters.consecutive_rejected >= reanchor_after_rejections.max(1) {
-                    self.reset_counter = None;
-                }
-            }
+            Outcome::Accepted => count(&mut self.counters.accepted),
+            Outcome::Rejected => count(&mut self.counters.rejected),
             Outcome::Invalid => count(&mut self.counters.invalid),
         }
         FixOutcome::Fused(outcome)
@@ -253,7 +241,7 @@ mod tests {
     }
 
     fn fuse(frame: &mut CompanionFrame, ekf: &mut Ekf, f: &PoseFix) -> FixOutcome {
-        frame.fuse(ekf, &PoseFixConfig::default(), f, 0.0, 10)
+        frame.fuse(ekf, &PoseFixConfig::default(), f, 0.0)
     }
 
     #[test]
@@ -305,19 +293,17 @@ mod tests {
     }
 
     #[test]
-    fn a_run_of_rejections_re_anchors() {
+    fn a_disagreeing_fix_without_a_reset_is_never_fused() {
         let mut ekf = Ekf::new(EkfConfig::default());
         let mut frame = CompanionFrame::default();
         fuse(&mut frame, &mut ekf, &fix(0.0, 0.0, 0.0, 0));
-        for _ in 0..10 {
-            fuse(&mut frame, &mut ekf, &fix(5.0, 0.0, 0.0, 0));
+        for _ in 0..50 {
+            let out = fuse(&mut frame, &mut ekf, &fix(5.0, 0.0, 0.0, 0));
+            assert_eq!(out, FixOutcome::Fused(Outcome::Rejected));
         }
-        assert_eq!(frame.counters().rejected, 10);
-        assert_eq!(
-            fuse(&mut frame, &mut ekf, &fix(5.0, 0.0, 0.0, 0)),
-            FixOutcome::Anchored
-        );
         assert_eq!(ekf.state()[ix::POS], 0.0);
+        let c = frame.counters();
+        assert_eq!((c.rejected, c.anchors), (50, 1));
     }
 
     #[test]
@@ -340,11 +326,11 @@ mod tests {
         for b in &bad {
             assert_eq!(fuse(&mut frame, &mut ekf, b), FixOutcome::Refused, "{b:?}");
         }
-        let late = frame.fuse(&mut ekf, &PoseFixConfig::default(), &good, 2.0, 10);
+        let late = frame.fuse(&mut ekf, &PoseFixConfig::default(), &good, 2.0);
         assert_eq!(late, FixOutcome::Refused);
-        let nan_age = frame.fuse(&mut ekf, &PoseFixConfig::default(), &good, f32::NAN, 10);
+        let nan_age = frame.fuse(&mut ekf, &PoseFixConfig::default(), &good, f32::NAN);
         assert_eq!(nan_age, FixOutcome::Refused);
-        let future = frame.fuse(&mut ekf, &PoseFixConfig::default(), &good, -1e6, 10);
+        let future = frame.fuse(&mut ekf, &PoseFixConfig::default(), &good, -1e6);
         assert_eq!(future, FixOutcome::Refused);
         assert_eq!((*ekf.state(), *ekf.covariance()), before);
         let c = frame.counters();

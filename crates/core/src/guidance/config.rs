@@ -44,6 +44,10 @@ pub struct GuidanceConfig {
     /// 1.0 /s: the approach slows exponentially (time constant 1 s) and never reaches `r_min`
     /// while the velocity loop follows. Applies in every mode after everything else.
     pub approach_rate_1_s: f32,
+    /// How long hits within the guard's reach are remembered, s (0: not at all). Default 1.0 s:
+    /// five revolutions of a 5 Hz lidar, long enough to pass a wall end that vanishes when seen
+    /// edge-on, short enough that estimate drift and walking people leave no lasting ghosts.
+    pub obstacle_memory_s: f32,
     /// Narrowest opening taken as a gap to fly through, m. Default 1.0 m = 2 `r_min`. Must be
     /// wider than the vehicle (2 × radius): narrower openings are treated as wall.
     pub min_gap_width_m: f32,
@@ -83,6 +87,7 @@ impl Default for GuidanceConfig {
             centring_gain_1_s: 1.0,
             waypoint_gain_1_s: 1.0,
             approach_rate_1_s: 1.0,
+            obstacle_memory_s: 1.0,
             min_gap_width_m: 1.0,
             line_tolerance_m: 0.05,
             max_point_spacing_m: 0.3,
@@ -122,7 +127,7 @@ impl GuidanceConfig {
     /// Checks every field; the first unusable one is returned.
     pub fn validate(&self) -> Result<(), GuidanceConfigError> {
         let positive = "finite and greater than 0";
-        let checks: [(&'static str, f32, bool, &'static str); 19] = [
+        let checks: [(&'static str, f32, bool, &'static str); 20] = [
             (
                 "vehicle_radius_m",
                 self.vehicle_radius_m,
@@ -183,6 +188,12 @@ impl GuidanceConfig {
                 self.approach_rate_1_s,
                 is_pos(self.approach_rate_1_s),
                 positive,
+            ),
+            (
+                "obstacle_memory_s",
+                self.obstacle_memory_s,
+                is_non_neg(self.obstacle_memory_s),
+                "finite and at least 0",
             ),
             (
                 "min_gap_width_m",
@@ -277,6 +288,7 @@ mod tests {
         assert_eq!(bad(|c| c.min_gap_width_m = 0.6), "min_gap_width_m");
         assert_eq!(bad(|c| c.min_segment_points = 1), "min_segment_points");
         assert_eq!(bad(|c| c.rule_sweep_rad = 7.0), "rule_sweep_rad");
+        assert_eq!(bad(|c| c.obstacle_memory_s = -1.0), "obstacle_memory_s");
         assert_eq!(
             bad(|c| c.vehicle_radius_m = f32::INFINITY),
             "vehicle_radius_m"

@@ -24,16 +24,19 @@ pub fn allowed_approach_m_s(range_m: f32, cfg: &GuidanceConfig) -> f32 {
     (cfg.approach_rate_1_s * (range_m - cfg.r_min_m())).max(0.0)
 }
 
-/// Removes from `v` (sensor frame, m/s) what exceeds the allowed approach speed to any hit.
-pub(super) fn guard_velocity<const N: usize>(
+/// Removes from `v` (sensor frame, m/s) what exceeds the allowed approach speed to any hit of
+/// the sweep or any remembered one (`remembered` gives unit direction and range, body frame).
+pub(super) fn guard_velocity<const N: usize, I: Iterator<Item = (Vec2, f32)>>(
     v: Vec2,
     sweep: &Sweep<N>,
+    remembered: impl Fn() -> I,
     cfg: &GuidanceConfig,
 ) -> (Vec2, Guard) {
     let hits = || {
         (0..sweep.len())
             .filter(|&pos| sweep.is_usable(pos))
             .map(|pos| (sweep.unit(pos), sweep.range_m(pos)))
+            .chain(remembered())
     };
     // Each correction only shortens `v`, so hits whose allowance exceeds the current speed can
     // never be violated and are skipped.
@@ -98,18 +101,19 @@ mod tests {
         let mut scan: Scan<2> = Scan::new(0.0);
         scan.push(Beam::new(0.0, cfg.r_min_m() + 0.1)).unwrap();
         let sweep = Sweep::new(&scan, cfg.rule_start_rad);
-        let (v, g) = guard_velocity(Vec2::new(0.4, 0.3), &sweep, &cfg);
+        let none = || core::iter::empty();
+        let (v, g) = guard_velocity(Vec2::new(0.4, 0.3), &sweep, none, &cfg);
         assert_eq!(g, Guard::Limited);
         assert!((v.x - 0.1 * cfg.approach_rate_1_s).abs() < 1e-5 && (v.y - 0.3).abs() < 1e-6);
         // Away from the wall: untouched. Inside r_min: no approach at all.
         assert_eq!(
-            guard_velocity(Vec2::new(-0.4, 0.3), &sweep, &cfg),
+            guard_velocity(Vec2::new(-0.4, 0.3), &sweep, none, &cfg),
             (Vec2::new(-0.4, 0.3), Guard::Clear)
         );
         let mut inside: Scan<2> = Scan::new(0.0);
         inside.push(Beam::new(0.0, 0.2)).unwrap();
         let sweep = Sweep::new(&inside, cfg.rule_start_rad);
-        let (v, _) = guard_velocity(Vec2::new(0.4, 0.0), &sweep, &cfg);
+        let (v, _) = guard_velocity(Vec2::new(0.4, 0.0), &sweep, none, &cfg);
         assert!(v.x.abs() < 1e-6);
     }
 }

@@ -5,12 +5,14 @@
 //! Pure and heap-free: [`Guidance::step`] takes one revolution and the estimated pose and
 //! returns a world-frame velocity and heading plus what the rules decided. It knows nothing of
 //! flight modes; the autopilot or a companion computer calls it once per revolution. Memory:
-//! `size_of::<Guidance<S>>()` (7.8 KB for 64 segments) plus about 6 KB of stack a step for
-//! a 360-beam scan.
+//! `size_of::<Guidance<S>>()` (12 KB for 64 segments, 4 KB of it the near-hit memory) plus
+//! about 6 KB of stack a step for a 360-beam scan.
 //!
 //! Safety: whatever the rules and the field ask, the last stage ([`guard`]) limits the speed
 //! toward every hit to `approach_rate · (r − r_min)`, so no command closes on a wall inside
-//! `r_min`; a featureless corridor is flown centred, along the wall's direction.
+//! `r_min`; hits within the guard's reach are remembered for `obstacle_memory_s`, so a wall
+//! end the lidar loses at a grazing angle still counts. A featureless corridor is flown
+//! centred, along the wall's direction.
 //!
 //! Degraded input: no usable beam, a non-finite pose or waypoint give a hover (zero velocity,
 //! heading held) with the reason in [`Outcome`]; more segments than `S` keep the first `S`.
@@ -25,6 +27,7 @@ pub mod field;
 pub mod gaps;
 pub mod guard;
 pub mod heading;
+mod memory;
 pub mod prls;
 mod run;
 pub mod step;

@@ -8,6 +8,7 @@ use super::config::{GuidanceConfig, GuidanceConfigError};
 use super::field::{field_sum, FieldPart, FieldSum};
 use super::guard::{guard_velocity, Guard};
 use super::heading::{choose_heading, HeadingRule, SideClearance};
+use super::memory::NearMemory;
 use super::prls::WallSegments;
 use super::sweep::Sweep;
 use crate::geom::{normalize_angle, Pose2, Vec2};
@@ -75,6 +76,7 @@ pub struct GuidanceCommand {
 pub struct Guidance<const S: usize> {
     cfg: GuidanceConfig,
     walls: WallSegments<S>,
+    memory: NearMemory,
 }
 
 impl<const S: usize> Guidance<S> {
@@ -84,6 +86,7 @@ impl<const S: usize> Guidance<S> {
         Ok(Self {
             cfg,
             walls: WallSegments::default(),
+            memory: NearMemory::default(),
         })
     }
 
@@ -96,7 +99,8 @@ impl<const S: usize> Guidance<S> {
         &self.walls
     }
 
-    /// One step: `scan` in the body frame, `pose` the estimated world pose of the body.
+    /// One step: `scan` in the body frame, `pose` the estimated world pose of the body. The
+    /// scan's stamp is the clock of the near-hit memory (hits kept `obstacle_memory_s`).
     pub fn step<const N: usize>(
         &mut self,
         scan: &Scan<N>,
@@ -142,7 +146,11 @@ impl<const S: usize> Guidance<S> {
             }
         };
         let (limited, speed_limited) = limit_speed(wish_body, cfg.max_speed_m_s);
-        let (safe, guard) = guard_velocity(limited, &sweep, &cfg);
+        let now = scan.stamp_s;
+        let recalled = || self.memory.recalled(pose, now, cfg.obstacle_memory_s);
+        let (safe, guard) = guard_velocity(limited, &sweep, recalled, &cfg);
+        let guard_reach_m = cfg.r_min_m() + cfg.max_speed_m_s / cfg.approach_rate_1_s;
+        self.memory.remember(&sweep, pose, now, guard_reach_m);
         let world = pose.rotate(safe);
         GuidanceCommand {
             velocity_world_m_s: [world.x, world.y],
