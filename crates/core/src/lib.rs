@@ -14,5 +14,6 @@ pub mod scan;
 pub mod lidar;
 pub mod matching;
 pub mod estimate;
+pub mod guidance;
 pub mod control;
 pub mod flight;

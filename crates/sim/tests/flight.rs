@@ -21,7 +21,7 @@ fn config(world: &str, seed: u64) -> SimConfig {
     )
 }
 
-fn hold(c: &SimConfig, seconds: f64) -> Pilot {
+fn hold(c: &SimConfig, seconds: f64) -> Pilot<'static> {
     Pilot::Test(Plan::hold(&c.world, PlanLimits::default(), seconds))
 }
 

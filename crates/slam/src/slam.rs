@@ -143,6 +143,27 @@ impl<'m, const N: usize> Slam<'m, N> {
         }
     }
 
+    /// Keyframes made so far (the threaded backend may not have processed the newest yet).
+    pub fn keyframe_count(&self) -> usize {
+        self.keyframe_tracking.len()
+    }
+
+    /// The map-frame pose of keyframe `k` as known now (see [`Self::add_scan`]); `None` if
+    /// there is no such keyframe. A live map places keyframes with it.
+    pub fn keyframe_pose(&self, k: usize) -> Option<Pose2> {
+        (k < self.keyframe_tracking.len()).then(|| self.current_pose(k))
+    }
+
+    /// Whether keyframe `k` keeps its scan in the map (`false`: the backend dropped it as a
+    /// repeat of an older keyframe at nearly the same pose); `None` while the backend has not
+    /// processed it or there is no such keyframe.
+    pub fn keyframe_kept(&self, k: usize) -> Option<bool> {
+        match &self.backend {
+            BackendRun::Inline(b) => b.keyframes().get(k).map(|kf| kf.has_scan()),
+            BackendRun::Threaded(w) => w.kept(k),
+        }
+    }
+
     /// Backend counts so far (inline: exact; threaded: as last published).
     pub fn backend_stats(&self) -> BackendStats {
         match &self.backend {

@@ -18,6 +18,9 @@ use std::thread::JoinHandle;
 #[derive(Clone, Debug, Default)]
 pub struct Published {
     pub poses: Vec<Pose2>,
+    /// Whether each processed keyframe kept its scan (see [`Keyframe::has_scan`]); a keyframe
+    /// is thinned only when it is added, so the flag never changes once published.
+    pub kept: Vec<bool>,
     pub stats: BackendStats,
 }
 
@@ -41,6 +44,8 @@ impl<const N: usize> Worker<N> {
                     if let Ok(mut p) = shared.lock() {
                         p.poses.clear();
                         p.poses.extend_from_slice(backend.poses());
+                        p.kept
+                            .push(backend.keyframes().last().is_some_and(Keyframe::has_scan));
                         p.stats = backend.stats();
                     }
                 }
@@ -74,6 +79,11 @@ impl<const N: usize> Worker<N> {
             Some(&pose) => Some(Ok(pose)),
             None => p.poses.last().map(|&pose| Err((p.poses.len() - 1, pose))),
         }
+    }
+
+    /// Whether keyframe `k` kept its scan, `None` until the worker has processed it.
+    pub fn kept(&self, k: usize) -> Option<bool> {
+        self.published.lock().ok()?.kept.get(k).copied()
     }
 
     /// Waits for every queued keyframe to be processed and returns the backend.

@@ -2,6 +2,7 @@
 //! ground truth in the benchmark formats (DESIGN.md §4, §5). The scenarios and their scoring are
 //! `plumbline-sim`'s; this command parses, writes files, plots and prints.
 
+mod explore;
 mod onboard;
 mod outputs;
 mod plot;
@@ -43,7 +44,8 @@ pub struct SimArgs {
     /// Vehicle preset (f450, pelican) or a TOML file (`base = "..."` plus overrides).
     #[arg(long, default_value = "f450")]
     pub vehicle: String,
-    /// Run length of the closed-loop scenarios (default 60) and of the test pilot's `hold`;
+    /// Run length of the closed-loop scenarios (default 60; `explore` 600, and it plans its way
+    /// home to be down by then) and of the test pilot's `hold`;
     /// an upper bound on the flight for `survey`, s. Valid range: (0, 86400].
     #[arg(long, value_parser = within::<f64>(Range::above(0.0, 86400.0)))]
     pub duration: Option<f64>,
@@ -143,6 +145,8 @@ const OUTPUT_NAMES: &[&str] = &[
     "flight.png",
     "position_error.png",
     "motors.png",
+    "map.png",
+    "explored.png",
 ];
 
 /// Refuses a world or vehicle file that a flight's outputs would overwrite.
@@ -304,6 +308,12 @@ pub fn run(args: SimArgs) -> CliResult {
         onboard::extend_summary(&mut summary, &args.closed_loop, &config, log, score);
         if let Some(dir) = args.out.as_deref() {
             onboard::plots(dir, &config, log, &collector.states)?;
+        }
+    }
+    if let (Some(score), Some(exploration)) = (&report.score.explore, &report.exploration) {
+        explore::extend_summary(&mut summary, score, exploration);
+        if let Some(dir) = args.out.as_deref() {
+            explore::plots(dir, &config, exploration, &collector.states)?;
         }
     }
     if let (Some(dir), Some(logs)) = (args.out.as_deref(), collector.logs.take()) {

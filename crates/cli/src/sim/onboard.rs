@@ -8,6 +8,7 @@ use crate::report::CliError;
 use clap::Args;
 use plotters::prelude::*;
 use plumbline_core::msgs::{FailsafeReason, FlightMode};
+use plumbline_sim::runner::companion::Strategy;
 use plumbline_sim::runner::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
 use plumbline_sim::scenario::score::OnboardScore;
@@ -31,6 +32,11 @@ pub struct ClosedLoopArgs {
     /// what the people in `hold-people` cost without it.
     #[arg(long)]
     pub no_rejection: bool,
+    /// How `explore` chooses where to go: `frontier` (the nearest reachable edge of the known
+    /// map, flown by the velocity field) or `wall-follow` (the velocity field and its heading
+    /// rules alone).
+    #[arg(long, default_value = "frontier", value_parser = ["frontier", "wall-follow"])]
+    pub guidance: String,
 }
 
 impl ClosedLoopArgs {
@@ -45,11 +51,16 @@ impl ClosedLoopArgs {
             "soft" => Tuning::Soft,
             _ => Tuning::Aggressive,
         };
+        let strategy = match self.guidance.as_str() {
+            "wall-follow" => Strategy::WallFollow,
+            _ => Strategy::Frontier,
+        };
         Options {
             controller,
             tuning,
             dynamic_rejection: !self.no_rejection,
             duration_s,
+            strategy,
         }
     }
 }

@@ -2,6 +2,8 @@
 //! attitude and battery over time.
 
 use crate::plot::fonts_available;
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plumbline_sim::runner::{StateSample, TruthPose};
 use plumbline_sim::world::World;
@@ -16,29 +18,8 @@ pub fn top_view(
     states: &[StateSample],
     scans: &[TruthPose],
 ) -> Result<(), Box<dyn Error>> {
-    let [x0, y0, x1, y1] = world.bounds();
-    let (w, h) = (x1 - x0, y1 - y0);
-    let px = 1000u32;
-    let py = ((px as f64 * h / w.max(1e-3)).round() as u32).clamp(200, 2000);
-    let root = BitMapBackend::new(path, (px, py)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let labels = fonts_available();
-    let mut builder = ChartBuilder::on(&root);
-    builder.margin(10);
-    if labels {
-        builder
-            .caption(
-                format!("{}: walls and flown path (m)", world.name),
-                ("sans-serif", 20),
-            )
-            .x_label_area_size(30)
-            .y_label_area_size(40);
-    }
-    let m = 0.5;
-    let mut chart = builder.build_cartesian_2d(x0 - m..x1 + m, y0 - m..y1 + m)?;
-    if labels {
-        chart.configure_mesh().disable_mesh().draw()?;
-    }
+    let root = world_canvas(path, world, 1000)?;
+    let mut chart = world_chart(&root, world, "walls and flown path")?;
     for s in &world.walls {
         chart.draw_series(LineSeries::new(
             [(s.a[0], s.a[1]), (s.b[0], s.b[1])],
@@ -72,6 +53,49 @@ pub fn top_view(
     root.present()?;
     Ok(())
 }
+
+/// A white canvas for the world's floor plan, `width` pixels wide and as high as the plan's
+/// shape asks (within 200 pixels and twice the width).
+pub fn world_canvas<'p>(
+    path: &'p Path,
+    world: &World,
+    width: u32,
+) -> Result<DrawingArea<BitMapBackend<'p>, Shift>, Box<dyn Error>> {
+    let [x0, y0, x1, y1] = world.bounds();
+    let height = (f64::from(width) * (y1 - y0) / (x1 - x0).max(1e-3)).round() as u32;
+    let root = BitMapBackend::new(path, (width, height.clamp(200, 2 * width))).into_drawing_area();
+    root.fill(&WHITE)?;
+    Ok(root)
+}
+
+/// A chart over the world's bounds with half a metre around them, captioned "NAME: `what` (m)"
+/// and with axes when a font is available.
+pub fn world_chart<'a, 'p>(
+    root: &'a DrawingArea<BitMapBackend<'p>, Shift>,
+    world: &World,
+    what: &str,
+) -> Result<WorldChart<'a, 'p>, Box<dyn Error>> {
+    let [x0, y0, x1, y1] = world.bounds();
+    let labels = fonts_available();
+    let mut builder = ChartBuilder::on(root);
+    builder.margin(10);
+    if labels {
+        builder
+            .caption(format!("{}: {what} (m)", world.name), ("sans-serif", 20))
+            .x_label_area_size(30)
+            .y_label_area_size(40);
+    }
+    let m = 0.5;
+    let mut chart = builder.build_cartesian_2d(x0 - m..x1 + m, y0 - m..y1 + m)?;
+    if labels {
+        chart.configure_mesh().disable_mesh().draw()?;
+    }
+    Ok(chart)
+}
+
+/// The chart [`world_chart`] makes.
+pub type WorldChart<'a, 'p> =
+    ChartContext<'a, BitMapBackend<'p>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// Heading in degrees without the jumps at ±180, so turns read as turns.
 fn unwrapped_yaw_deg(states: &[StateSample]) -> Vec<(f64, f64)> {

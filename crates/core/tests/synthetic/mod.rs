@@ -64,6 +64,19 @@ pub fn scan<const N: usize>(
     noise: f32,
     seed: u64,
 ) -> Scan<N> {
+    scan_within(world, pose, beams, fov, noise, seed, 12.0)
+}
+
+/// [`scan`] with a lidar that sees no farther than `max_range_m` (farther hits are no return).
+pub fn scan_within<const N: usize>(
+    world: &[Seg],
+    pose: Pose2,
+    beams: usize,
+    fov: f32,
+    noise: f32,
+    seed: u64,
+    max_range_m: f32,
+) -> Scan<N> {
     let mut rng = seed
         .wrapping_mul(6364136223846793005)
         .wrapping_add(1442695040888963407);
@@ -83,7 +96,7 @@ pub fn scan<const N: usize>(
     for i in 0..beams {
         let a = -fov / 2.0 + step * i as f32;
         let dir = pose.rotate(Vec2::new(a.cos(), a.sin()));
-        let r = cast(world, pose.translation(), dir).filter(|&r| r < 12.0);
+        let r = cast(world, pose.translation(), dir).filter(|&r| r < max_range_m);
         // Sum of three uniforms: roughly Gaussian with standard deviation `noise`.
         let n = noise * 2.0 * (uniform() + uniform() + uniform());
         s.push(match r {

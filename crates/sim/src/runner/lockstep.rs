@@ -90,7 +90,7 @@ pub(super) struct Lockstep<'c> {
     battery: Battery,
     walkers: &'c [Walker],
     people: Vec<Cylinder>,
-    pilot: Pilot,
+    pilot: Pilot<'c>,
     test_pilot: TestPilot,
     forcing: Forcing,
     energy: EnergyTally,
@@ -125,7 +125,7 @@ impl<'c> Lockstep<'c> {
     /// survey's instructions).
     pub(super) fn new(
         config: &'c SimConfig,
-        pilot: Pilot,
+        pilot: Pilot<'c>,
     ) -> Result<(Self, Dynamics, BodyState), SetupError> {
         let test_pilot = config.validate()?;
         let (v, world) = (&config.vehicle, &config.world);

@@ -11,6 +11,7 @@
 
 mod config;
 mod lockstep;
+pub mod companion;
 pub mod onboard_link;
 pub mod pilot;
 pub mod plan;
@@ -28,9 +29,9 @@ use lockstep::Lockstep;
 
 /// Flies one run to the end and reports it: the lockstep loop of physics, sensors and pilot
 /// (see `Lockstep::step`) until the flight's end or the first crash.
-pub fn run(
-    config: &SimConfig,
-    pilot: Pilot,
+pub fn run<'a>(
+    config: &'a SimConfig,
+    pilot: Pilot<'a>,
     recorder: &mut dyn Recorder,
 ) -> Result<Outcome, SetupError> {
     let (mut sim, dynamics, mut body) = Lockstep::new(config, pilot)?;

@@ -2,6 +2,10 @@
 //! PID, mixer, modes and failsafes) behind the runner's [`FlightSoftware`] interface, with a
 //! scripted pilot's radio and lidar failure injection (what the closed-loop scenarios script).
 //!
+//! A companion computer ([`CompanionComputer`]: SLAM, exploration, guidance) may ride along
+//! ([`WithCompanion`]): it sees each revolution as the stack does and its messages reach the
+//! autopilot in the same step, as a wired link would deliver them between two steps.
+//!
 //! The runner consumes the flight software, so what the stack did (modes, failsafes, its
 //! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
 //! to. The runner never hands the stack ground truth; the log holds only onboard values.
@@ -14,8 +18,8 @@ use plumbline_core::flight::autopilot::AutopilotConfig;
 use plumbline_core::flight::onboard::Onboard;
 use plumbline_core::matching::OdometryConfig;
 use plumbline_core::msgs::{
-    EstimatedState, FailsafeReason, FlightMode, FrameKind, ImuSample, Inputs, MotorCommands,
-    PilotInput,
+    CompanionMessages, EstimatedState, FailsafeReason, FlightMode, FrameKind, ImuSample, Inputs,
+    MotorCommands, PilotInput,
 };
 use plumbline_core::scan::{Beam, Scan};
 use std::cell::RefCell;
@@ -193,12 +197,21 @@ fn fill_scan<const N: usize>(s: &LidarScan, scan: &mut Scan<N>) {
     }
 }
 
-impl<const N: usize> FlightSoftware for OnboardLink<N> {
-    fn rate_hz(&self) -> f64 {
-        ONBOARD_RATE_HZ
-    }
+/// The companion computer's side of the link: it receives each revolution (in the onboard
+/// format, as the flight part gets it) with what the flight part has reported so far, and
+/// answers with its messages for the flight part.
+pub trait CompanionComputer<const N: usize> {
+    fn revolution(&mut self, scan: &Scan<N>, flight: &FlightLog) -> CompanionMessages;
+}
 
-    fn step(&mut self, frame: &SensorFrame<'_>, dt_s: f64) -> MotorCommands {
+impl<const N: usize> OnboardLink<N> {
+    /// One onboard step; `companion`, when there is one, answers each new revolution first.
+    fn step_with(
+        &mut self,
+        frame: &SensorFrame<'_>,
+        dt_s: f64,
+        companion: Option<&mut dyn CompanionComputer<N>>,
+    ) -> MotorCommands {
         if let Some(s) = frame.imu.last() {
             self.last_imu = *s;
         }
@@ -210,6 +223,10 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             }
             _ => None,
         };
+        let messages = match (scan, companion) {
+            (Some(scan), Some(c)) => c.revolution(scan, &self.log.borrow()),
+            _ => CompanionMessages::default(),
+        };
         let inputs = Inputs {
             t_s: frame.t_s,
             imu: self.last_imu,
@@ -217,7 +234,7 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             scan_match: None,
             battery: Some(frame.battery),
             pilot: self.script.radio_at(frame.t_s),
-            companion: Default::default(),
+            companion: messages,
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         let mut log = self.log.borrow_mut();
@@ -238,6 +255,32 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             });
         }
         out.motors
+    }
+}
+
+impl<const N: usize> FlightSoftware for OnboardLink<N> {
+    fn rate_hz(&self) -> f64 {
+        ONBOARD_RATE_HZ
+    }
+
+    fn step(&mut self, frame: &SensorFrame<'_>, dt_s: f64) -> MotorCommands {
+        self.step_with(frame, dt_s, None)
+    }
+}
+
+/// The onboard stack with a companion computer on board.
+pub struct WithCompanion<'a, const N: usize> {
+    pub link: OnboardLink<N>,
+    pub companion: Box<dyn CompanionComputer<N> + 'a>,
+}
+
+impl<const N: usize> FlightSoftware for WithCompanion<'_, N> {
+    fn rate_hz(&self) -> f64 {
+        ONBOARD_RATE_HZ
+    }
+
+    fn step(&mut self, frame: &SensorFrame<'_>, dt_s: f64) -> MotorCommands {
+        self.link.step_with(frame, dt_s, Some(&mut *self.companion))
     }
 }
 

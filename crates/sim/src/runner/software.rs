@@ -22,10 +22,11 @@ pub trait FlightSoftware {
     fn step(&mut self, sensors: &SensorFrame<'_>, dt_s: f64) -> MotorCommands;
 }
 
-/// Who flies.
-pub enum Pilot {
+/// Who flies; `'a` bounds what the onboard software may borrow (a companion's SLAM borrows
+/// its local map's cells from the caller).
+pub enum Pilot<'a> {
     /// The ground-truth test pilot flying a scripted plan (simulator-only, see [`crate::runner::pilot`]).
     Test(Plan),
     /// Onboard code; the run lasts `SimConfig::max_duration_s`.
-    Onboard(Box<dyn FlightSoftware>),
+    Onboard(Box<dyn FlightSoftware + 'a>),
 }

@@ -2,12 +2,16 @@
 //! may be refused ([`ScenarioError`]), the prepared [`Flight`], and [`fly`], which runs and
 //! scores it.
 
+use super::explore_score::Exploration;
 use super::score::{self, Judge, Score};
 use crate::disturb::Push;
+use crate::runner::companion::{AnyExploreCrew, CompanionLog, Strategy};
 use crate::runner::onboard_link::FlightLog;
 use crate::runner::plan::Plan;
 use crate::runner::{self, Outcome, Pilot, Recorder, SetupError, SimConfig};
 use crate::world::WorldError;
+use plumbline_core::matching::local_map::MapCell;
+use plumbline_explore::Explorer;
 use std::cell::RefCell;
 use std::rc::Rc;
 
@@ -62,6 +66,8 @@ pub struct Options {
     pub dynamic_rejection: bool,
     /// Run length, s: the scenario's default when `None`.
     pub duration_s: Option<f64>,
+    /// How an exploring vehicle chooses where to go.
+    pub strategy: Strategy,
 }
 
 impl Default for Options {
@@ -72,6 +78,7 @@ impl Default for Options {
             tuning: Tuning::default(),
             dynamic_rejection: true,
             duration_s: None,
+            strategy: Strategy::default(),
         }
     }
 }
@@ -120,9 +127,16 @@ impl core::fmt::Display for ScenarioError {
 
 impl std::error::Error for ScenarioError {}
 
+/// Who flies: ready, or an exploring crew that boards in [`fly`], which owns the cells its
+/// SLAM borrows for the flight.
+enum Crew {
+    Ready(Pilot<'static>),
+    Explore(Box<AnyExploreCrew>),
+}
+
 /// A scenario set up and ready to fly.
 pub struct Flight {
-    pilot: Pilot,
+    crew: Crew,
     judge: Judge,
     /// How long the flight is planned to last, s (for progress).
     pub planned_s: f64,
@@ -133,7 +147,7 @@ impl Flight {
     pub fn test_pilot(plan: Plan, config: &SimConfig) -> Self {
         let planned_s = plan.duration_s().min(config.max_duration_s);
         Self {
-            pilot: Pilot::Test(plan),
+            crew: Crew::Ready(Pilot::Test(plan)),
             judge: Judge::Tracking,
             planned_s,
         }
@@ -142,14 +156,36 @@ impl Flight {
     /// Onboard software that logs into `log`, scored on holding over the start; `push` is the
     /// scenario's own push, whose effect is scored apart.
     pub fn onboard(
-        pilot: Pilot,
+        pilot: Pilot<'static>,
         log: Rc<RefCell<FlightLog>>,
         push: Option<Push>,
         config: &SimConfig,
     ) -> Self {
         Self {
-            pilot,
+            crew: Crew::Ready(pilot),
             judge: Judge::Onboard { log, push },
+            planned_s: config.max_duration_s,
+        }
+    }
+
+    /// The onboard stack exploring with its companion, scored on the exploration; `log` is
+    /// the stack's, `companion` and `explorer` the companion's.
+    pub fn explore(
+        crew: AnyExploreCrew,
+        strategy: Strategy,
+        log: Rc<RefCell<FlightLog>>,
+        companion: Rc<RefCell<CompanionLog>>,
+        explorer: Rc<RefCell<Explorer>>,
+        config: &SimConfig,
+    ) -> Self {
+        Self {
+            crew: Crew::Explore(Box::new(crew)),
+            judge: Judge::Explore {
+                strategy,
+                log,
+                companion,
+                explorer,
+            },
             planned_s: config.max_duration_s,
         }
     }
@@ -185,13 +221,14 @@ impl Entry {
     }
 }
 
-/// What a flight did: the runner's figures, the score, and the onboard stack's own log when
-/// it flew.
+/// What a flight did: the runner's figures, the score, the onboard stack's own log when it
+/// flew, and the companion's map and coverage series when it explored.
 #[derive(Clone, Debug)]
 pub struct Report {
     pub outcome: Outcome,
     pub score: Score,
     pub onboard: Option<FlightLog>,
+    pub exploration: Option<Exploration>,
 }
 
 /// Flies `flight` on `config` (as prepared for it), handing every sample to `recorder`, and
@@ -201,12 +238,22 @@ pub fn fly(
     flight: Flight,
     recorder: &mut dyn Recorder,
 ) -> Result<Report, SetupError> {
-    let mut scorer = score::Scorer::new(recorder);
-    let outcome = runner::run(config, flight.pilot, &mut scorer)?;
-    let (score, onboard) = scorer.score(flight.judge, config, &outcome);
+    let mut scorer = score::Scorer::new(recorder, &flight.judge, config);
+    // The SLAM's local map of an exploring crew: here, so that it outlives the flight.
+    let mut cells: Vec<MapCell>;
+    let pilot = match flight.crew {
+        Crew::Ready(pilot) => pilot,
+        Crew::Explore(crew) => {
+            cells = crew.local_map();
+            crew.board(&mut cells)?
+        }
+    };
+    let outcome = runner::run(config, pilot, &mut scorer)?;
+    let (score, onboard, exploration) = scorer.score(flight.judge, config, &outcome);
     Ok(Report {
         outcome,
         score,
         onboard,
+        exploration,
     })
 }

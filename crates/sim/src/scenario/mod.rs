@@ -11,6 +11,9 @@
 //! - `land-on-low-battery` ([`low_battery`]): a nearly empty pack must bring the vehicle down.
 //! - `lidar-failure` ([`lidar_failure`]): the lidar stops; the vehicle holds on the IMU, then
 //!   lands.
+//! - `explore` ([`explore`]): the vehicle explores the world on its SLAM map with its
+//!   companion computer, comes home and lands; scored on what it saw ([`coverage`],
+//!   [`explore_score`]).
 //!
 //! Adding a scenario is one new file and one catalogue entry: write `scenario/NAME.rs` with a
 //! `pub(super) const ENTRY: Entry` (its parts come from `super::flight`) whose `prepare`
@@ -20,6 +23,9 @@
 //! here and add `NAME::ENTRY` to [`CATALOGUE`]. Scoring needs no new code unless the scenario
 //! judges something new: then it goes in [`score`], next to the rest.
 
+pub mod coverage;
+mod explore;
+pub mod explore_score;
 mod flight;
 pub mod hold;
 pub mod lidar_failure;
@@ -31,12 +37,13 @@ pub mod survey;
 pub use flight::{fly, Controller, Entry, Flight, Options, Report, ScenarioError, Tuning};
 
 /// Every scenario, as named on the command line.
-pub static CATALOGUE: [Entry; 5] = [
+pub static CATALOGUE: [Entry; 6] = [
     survey::ENTRY,
     hold::ENTRY,
     hold::WITH_PEOPLE,
     low_battery::ENTRY,
     lidar_failure::ENTRY,
+    explore::ENTRY,
 ];
 
 /// The scenario called `name`.

@@ -9,6 +9,7 @@ use crate::runner::onboard_link::{
 };
 use crate::runner::{Pilot, SimConfig};
 use plumbline_core::control::cascade::CascadeConfig;
+use plumbline_core::flight::autopilot::AutopilotConfig;
 use plumbline_core::matching::OdometryConfig;
 
 /// The arm switch goes on here: the first half second lets the filter settle on the ground, s.
@@ -44,17 +45,7 @@ pub(super) fn flight(
     script: Script,
     push: Option<Push>,
 ) -> Result<Flight, ScenarioError> {
-    let mut odometry = OdometryConfig::default();
-    odometry.matcher.dynamic_rejection = options.dynamic_rejection;
-    let mut autopilot = autopilot_for(&config.vehicle);
-    if options.tuning == Tuning::Soft {
-        // The airframe's hover collective and effectiveness stay; only the gains change.
-        autopilot.cascade = CascadeConfig {
-            hover_collective: autopilot.cascade.hover_collective,
-            effectiveness_rad_s2: autopilot.cascade.effectiveness_rad_s2,
-            ..CascadeConfig::soft()
-        };
-    }
+    let (odometry, autopilot) = stack(options, config);
     let (pilot, log) = if config.lidar.beams <= XV11_BEAMS {
         let (link, log) =
             OnboardLink::<XV11_BEAMS>::new(&config.lidar, odometry, autopilot, script)
@@ -67,4 +58,20 @@ pub(super) fn flight(
         (Pilot::Onboard(Box::new(link)), log)
     };
     Ok(Flight::onboard(pilot, log, push, config))
+}
+
+/// The scan matcher and the autopilot as the options ask, for the vehicle of `config`.
+pub(super) fn stack(options: &Options, config: &SimConfig) -> (OdometryConfig, AutopilotConfig) {
+    let mut odometry = OdometryConfig::default();
+    odometry.matcher.dynamic_rejection = options.dynamic_rejection;
+    let mut autopilot = autopilot_for(&config.vehicle);
+    if options.tuning == Tuning::Soft {
+        // The airframe's hover collective and effectiveness stay; only the gains change.
+        autopilot.cascade = CascadeConfig {
+            hover_collective: autopilot.cascade.hover_collective,
+            effectiveness_rad_s2: autopilot.cascade.effectiveness_rad_s2,
+            ..CascadeConfig::soft()
+        };
+    }
+    (odometry, autopilot)
 }

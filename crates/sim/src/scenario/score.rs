@@ -8,12 +8,15 @@
 //!
 //! [`STATE_RATE_HZ`]: crate::runner::STATE_RATE_HZ
 
+use super::explore_score::{Exploration, ExploreLogs, ExploreScore, ExploreWatch};
 use crate::disturb::Push;
 use crate::math::Vec3;
+use crate::runner::companion::{CompanionLog, Strategy};
 use crate::runner::onboard_link::FlightLog;
 use crate::runner::{Outcome, Recorder, SimConfig, StateSample, Status, TruthPose};
 use crate::sensors::lidar::LidarScan;
 use plumbline_core::msgs::{FlightMode, ImuSample, SonarSample};
+use plumbline_explore::Explorer;
 use std::cell::RefCell;
 use std::rc::Rc;
 
@@ -88,6 +91,7 @@ pub struct Score {
     /// Distance between the onboard estimate and the truth at the end, m (onboard only).
     pub estimate_drift_m: Option<f64>,
     pub onboard: Option<OnboardScore>,
+    pub explore: Option<ExploreScore>,
 }
 
 /// What only an onboard flight is scored on.
@@ -111,6 +115,22 @@ pub(super) enum Judge {
         log: Rc<RefCell<FlightLog>>,
         push: Option<Push>,
     },
+    /// The onboard stack with its exploring companion: scored on what it saw, how safely,
+    /// and how it came home.
+    Explore {
+        strategy: Strategy,
+        log: Rc<RefCell<FlightLog>>,
+        companion: Rc<RefCell<CompanionLog>>,
+        explorer: Rc<RefCell<Explorer>>,
+    },
+}
+
+/// The one owner's value of a log the runner shared with the flight software (dropped by
+/// now, so normally the log is the caller's alone).
+fn unshare<T: Clone>(shared: Rc<RefCell<T>>) -> T {
+    Rc::try_unwrap(shared)
+        .map(RefCell::into_inner)
+        .unwrap_or_else(|shared| shared.borrow().clone())
 }
 
 /// Passes every sample on to the caller's recorder and keeps what the score needs.
@@ -118,39 +138,59 @@ pub(super) struct Scorer<'r> {
     inner: &'r mut dyn Recorder,
     tracking: ErrorTally,
     states: Vec<StateSample>,
+    explore: Option<ExploreWatch>,
 }
 
 impl<'r> Scorer<'r> {
-    pub(super) fn new(inner: &'r mut dyn Recorder) -> Self {
+    pub(super) fn new(inner: &'r mut dyn Recorder, judge: &Judge, config: &SimConfig) -> Self {
         Self {
             inner,
             tracking: ErrorTally::default(),
             states: Vec::new(),
+            explore: matches!(judge, Judge::Explore { .. }).then(|| ExploreWatch::new(config)),
         }
     }
 
-    /// The score of the finished run, and the onboard stack's log when it flew.
+    /// The score of the finished run, the onboard stack's log when it flew, and what an
+    /// exploration left.
     pub(super) fn score(
         self,
         judge: Judge,
         config: &SimConfig,
         outcome: &Outcome,
-    ) -> (Score, Option<FlightLog>) {
+    ) -> (Score, Option<FlightLog>, Option<Exploration>) {
         match judge {
             Judge::Tracking => {
                 let score = Score {
                     hold: self.tracking.result(),
                     ..Score::default()
                 };
-                (score, None)
+                (score, None, None)
             }
             Judge::Onboard { log, push } => {
-                // The runner has dropped the stack, so the log is normally ours alone.
-                let log = Rc::try_unwrap(log)
-                    .map(RefCell::into_inner)
-                    .unwrap_or_else(|shared| shared.borrow().clone());
+                let log = unshare(log);
                 let score = score_onboard(&log, push, config, outcome, &self.states);
-                (score, Some(log))
+                (score, Some(log), None)
+            }
+            Judge::Explore {
+                strategy,
+                log,
+                companion,
+                explorer,
+            } => {
+                let log = unshare(log);
+                let mut score = score_onboard(&log, None, config, outcome, &self.states);
+                let watch = self.explore.unwrap_or_else(|| ExploreWatch::new(config));
+                let logs = ExploreLogs {
+                    strategy,
+                    log: &log,
+                    companion: unshare(companion),
+                    explorer: &explorer.borrow(),
+                    landed: score.onboard.is_some_and(|o| o.landed),
+                };
+                let (explore, exploration) = watch.score(logs, config, outcome, &self.states);
+                score.explore = Some(explore);
+                (score, Some(log), Some(exploration))
             }
         }
     }
@@ -158,6 +198,9 @@ impl<'r> Scorer<'r> {
 
 impl Recorder for Scorer<'_> {
     fn scan(&mut self, scan: &LidarScan, truth: &TruthPose) {
+        if let Some(w) = self.explore.as_mut() {
+            w.scan(scan, truth);
+        }
         self.inner.scan(scan, truth);
     }
     fn imu(&mut self, sample: &ImuSample) {
@@ -167,6 +210,9 @@ impl Recorder for Scorer<'_> {
         self.inner.sonar(sample);
     }
     fn state(&mut self, sample: &StateSample) {
+        if let Some(w) = self.explore.as_mut() {
+            w.state(sample);
+        }
         self.states.push(*sample);
         self.inner.state(sample);
     }
@@ -247,5 +293,6 @@ fn score_onboard(
             recovery_s,
             landed: !crashed && flew && log.final_mode() == FlightMode::Disarmed,
         }),
+        explore: None,
     }
 }

@@ -1,0 +1,118 @@
+//! Seed 002's heading rules: align with the farthest contiguous wall segment, going
+//! counter-clockwise from the start of the scan on the right until a gap wide enough to fly
+//! through; and the corridor test (free width under twice `r_goal`: keep equal distance to
+//! both sides).
+
+use super::config::GuidanceConfig;
+use super::prls::WallSegments;
+use super::sweep::{relative_angle, Sweep};
+use crate::geom::Vec2;
+use core::f32::consts::FRAC_PI_2;
+
+/// What the heading rules concluded from the segments in the rules' window.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HeadingRule {
+    /// No segment starts inside the window: the heading is held.
+    NoWall,
+    /// Align with `segment`; the chain of walls stopped at `gap` (index into `gaps()`), the first
+    /// gap wide enough, or at the last segment in the window (`None`).
+    FollowWall { segment: usize, gap: Option<usize> },
+    /// No gap wide enough in the window and the farthest wall points backwards: the vehicle
+    /// turns around (a dead end, or a room with no usable exit on this side).
+    DeadEnd { segment: usize },
+}
+
+/// The rules' choice: which way to point, relative to the sensor's x axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeadingChoice {
+    pub rule: HeadingRule,
+    /// Heading to take, rad relative to body x; `None` keeps the current one.
+    pub body_rad: Option<f32>,
+}
+
+/// Applies the wall-chain rule to the extracted segments.
+pub fn choose_heading<const S: usize>(
+    walls: &WallSegments<S>,
+    cfg: &GuidanceConfig,
+) -> HeadingChoice {
+    let segments = walls.segments();
+    let in_window = |k: usize| {
+        let s = segments[k].start_m;
+        relative_angle(libm::atan2f(s.y, s.x), cfg.rule_start_rad) < cfg.rule_sweep_rad
+    };
+    let Some(first) = (0..segments.len()).find(|&k| in_window(k)) else {
+        return HeadingChoice {
+            rule: HeadingRule::NoWall,
+            body_rad: None,
+        };
+    };
+    let mut last = first;
+    let mut gap = None;
+    while last + 1 < segments.len() && in_window(last + 1) {
+        if walls.gaps()[last].width_m >= cfg.min_gap_width_m {
+            gap = Some(last);
+            break;
+        }
+        last += 1;
+    }
+    let direction = segments[last].direction_rad();
+    let rule = if gap.is_none() && direction.abs() > FRAC_PI_2 {
+        HeadingRule::DeadEnd { segment: last }
+    } else {
+        HeadingRule::FollowWall { segment: last, gap }
+    };
+    HeadingChoice {
+        rule,
+        body_rad: Some(direction),
+    }
+}
+
+/// Distances to the nearest hit on either side of an axis (the followed wall's direction, or
+/// body x without one), among hits within 45° of the axis' normals, m; `None` for a side with
+/// no hit. Measured about the axis, not the body, so a vehicle that does not turn to its
+/// heading still sees a corridor's width.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SideClearance {
+    pub left_m: Option<f32>,
+    pub right_m: Option<f32>,
+    /// The axis, a unit vector in the sensor frame; "left" is its counter-clockwise side.
+    pub axis: Vec2,
+}
+
+impl SideClearance {
+    pub(super) fn measure<const N: usize>(sweep: &Sweep<N>, axis_rad: Option<f32>) -> Self {
+        let axis = axis_rad.map_or(Vec2::new(1.0, 0.0), |a| {
+            Vec2::new(libm::cosf(a), libm::sinf(a))
+        });
+        let mut left = f32::INFINITY;
+        let mut right = f32::INFINITY;
+        for pos in (0..sweep.len()).filter(|&p| sweep.is_usable(p)) {
+            let u = sweep.unit(pos);
+            let (along, across) = (u.dot(axis), axis.cross(u));
+            if along.abs() > across.abs() {
+                continue;
+            }
+            let lateral = sweep.range_m(pos) * across.abs();
+            if across > 0.0 {
+                left = left.min(lateral);
+            } else {
+                right = right.min(lateral);
+            }
+        }
+        Self {
+            left_m: left.is_finite().then_some(left),
+            right_m: right.is_finite().then_some(right),
+            axis,
+        }
+    }
+
+    /// Left plus right, when both sides have a hit.
+    pub fn free_width_m(&self) -> Option<f32> {
+        Some(self.left_m? + self.right_m?)
+    }
+
+    /// Seed 002, Fig. 5: under twice the wall-follow distance the vehicle keeps to the middle.
+    pub fn is_narrow(&self, cfg: &GuidanceConfig) -> bool {
+        self.free_width_m().is_some_and(|w| w < 2.0 * cfg.r_goal_m)
+    }
+}

@@ -1,0 +1,222 @@
+//! The occupancy grid on board, kept current from the online SLAM.
+//!
+//! Each keyframe's scan is inserted once the backend has decided whether it keeps it (a
+//! keyframe that only repeats an older one is dropped from the map, as the slam command's map
+//! drops it), at the keyframe's pose as known then. When the pose graph is optimised, loop
+//! closure has moved the keyframes, and the grid is rebuilt from every kept keyframe at its new
+//! pose. Between optimisations a scan costs at most the insertion of the keyframes that became
+//! ready; the grid is then the one `plumbline slam --map` would draw from the same keyframes.
+//!
+//! A rebuild costs the whole map, tens of milliseconds in a building, so it is spread over
+//! the scans that follow: a second grid is filled a bounded number of keyframes per update
+//! while the first keeps serving, and takes its place once it has caught up.
+
+use plumbline_core::geom::Pose2;
+use plumbline_core::scan::Scan;
+use plumbline_slam::grid::{GridConfig, GridError, OccupancyGrid, PreparedScan};
+use plumbline_slam::{ScanPose, Slam};
+
+/// What one update did, for cost accounting.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MapUpdate {
+    /// Keyframes inserted at their current pose.
+    pub inserted: usize,
+    /// Keyframes inserted into the grid being rebuilt.
+    pub rebuilt_keyframes: usize,
+    /// A rebuilt grid took the place of the old one.
+    pub rebuilt: bool,
+}
+
+/// A grid being filled at the poses of the latest optimisation.
+struct Rebuild {
+    grid: OccupancyGrid,
+    /// Keyframes before this one are in it.
+    next: usize,
+}
+
+pub struct LiveMap {
+    grid: OccupancyGrid,
+    map_range_m: f32,
+    /// Keyframe `k`'s scan (`None` once the backend dropped it, or before it was seen).
+    scans: Vec<Option<PreparedScan>>,
+    /// Keyframes before this one are settled: inserted or dropped.
+    settled: usize,
+    /// The backend's optimisation count the grid's poses are from.
+    optimisations: usize,
+    /// Changes whenever the grid does (inserts and rebuilds), so planners can tell.
+    version: u64,
+    rebuilds: usize,
+    rebuilding: Option<Rebuild>,
+    /// Most keyframes a rebuild inserts per update.
+    rebuild_per_update: usize,
+}
+
+impl LiveMap {
+    /// `rebuild_per_update`: most keyframes a rebuild after an optimisation inserts per
+    /// update (at least 1).
+    pub fn new(
+        grid: GridConfig,
+        map_range_m: f32,
+        rebuild_per_update: usize,
+    ) -> Result<Self, GridError> {
+        if !(map_range_m.is_finite() && map_range_m > 0.0) {
+            return Err(GridError::Config(format!(
+                "map range {map_range_m} m must be finite and positive"
+            )));
+        }
+        Ok(Self {
+            grid: OccupancyGrid::new(grid)?,
+            map_range_m,
+            scans: Vec::new(),
+            settled: 0,
+            optimisations: 0,
+            version: 0,
+            rebuilds: 0,
+            rebuilding: None,
+            rebuild_per_update: rebuild_per_update.max(1),
+        })
+    }
+
+    pub fn grid(&self) -> &OccupancyGrid {
+        &self.grid
+    }
+
+    /// Changes whenever the grid changes.
+    pub fn version(&self) -> u64 {
+        self.version
+    }
+
+    /// Rebuilds completed so far (an optimisation during a rebuild starts it again).
+    pub fn rebuilds(&self) -> usize {
+        self.rebuilds
+    }
+
+    /// Takes in the scan `slam` has just placed (`at`, from [`Slam::add_scan`]): keeps its
+    /// beams if it made a keyframe, inserts every keyframe the backend has settled since the
+    /// last call, and goes on rebuilding when the graph was optimised. A scan the grid refuses (a pose
+    /// beyond the map's extent) is reported and left out; the map stays as it was.
+    pub fn update<const N: usize>(
+        &mut self,
+        slam: &Slam<'_, N>,
+        scan: &Scan<N>,
+        at: &ScanPose,
+    ) -> Result<MapUpdate, GridError> {
+        if let (true, Some(k)) = (at.new_keyframe, at.keyframe) {
+            if self.scans.len() <= k {
+                self.scans.resize(k + 1, None);
+            }
+            let prepared = PreparedScan::from_beams(
+                scan.beams(),
+                self.map_range_m,
+                self.grid.config().no_return_clear_m,
+            )?;
+            self.scans[k] = Some(prepared);
+        }
+        let mut update = MapUpdate::default();
+        let optimisations = slam.backend_stats().optimisations;
+        let mut first_error = None;
+        if optimisations != self.optimisations {
+            self.optimisations = optimisations;
+            self.rebuilding = Some(Rebuild {
+                grid: OccupancyGrid::new(*self.grid.config())?,
+                next: 0,
+            });
+        }
+        while self.settled < self.scans.len() {
+            let k = self.settled;
+            match slam.keyframe_kept(k) {
+                None => break,
+                Some(false) => self.scans[k] = None,
+                Some(true) => {
+                    update.inserted += 1;
+                    if let Err(e) = self.insert(slam, k, false) {
+                        first_error.get_or_insert(e);
+                    }
+                }
+            }
+            self.settled += 1;
+        }
+        if let Err(e) = self.rebuild(slam, self.rebuild_per_update, &mut update) {
+            first_error.get_or_insert(e);
+        }
+        if update.rebuilt || update.inserted > 0 {
+            self.version += 1;
+        }
+        first_error.map_or(Ok(update), Err)
+    }
+
+    /// Finishes a rebuild in progress at once (the end of a flight, or a test that compares
+    /// the map with the slam's).
+    pub fn finish_rebuild<const N: usize>(&mut self, slam: &Slam<'_, N>) -> Result<(), GridError> {
+        let mut update = MapUpdate::default();
+        self.rebuild(slam, usize::MAX, &mut update)?;
+        if update.rebuilt {
+            self.version += 1;
+        }
+        Ok(())
+    }
+
+    /// Inserts up to `budget` settled keyframes into the grid being rebuilt, and puts it in
+    /// place once it holds them all.
+    fn rebuild<const N: usize>(
+        &mut self,
+        slam: &Slam<'_, N>,
+        budget: usize,
+        update: &mut MapUpdate,
+    ) -> Result<(), GridError> {
+        let mut first_error = None;
+        let mut spent = 0;
+        while let Some(next) = self.rebuilding.as_ref().map(|r| r.next) {
+            if next >= self.settled {
+                if let Some(done) = self.rebuilding.take() {
+                    self.grid = done.grid;
+                    self.rebuilds += 1;
+                    update.rebuilt = true;
+                }
+                break;
+            }
+            if spent >= budget {
+                break;
+            }
+            if self.scans[next].is_some() {
+                spent += 1;
+                update.rebuilt_keyframes += 1;
+                if let Err(e) = self.insert(slam, next, true) {
+                    first_error.get_or_insert(e);
+                }
+            }
+            if let Some(r) = self.rebuilding.as_mut() {
+                r.next += 1;
+            }
+        }
+        first_error.map_or(Ok(()), Err)
+    }
+
+    /// Inserts keyframe `k` at its current pose into the serving grid, or into the grid being
+    /// rebuilt.
+    fn insert<const N: usize>(
+        &mut self,
+        slam: &Slam<'_, N>,
+        k: usize,
+        into_rebuild: bool,
+    ) -> Result<(), GridError> {
+        let (Some(scan), Some(pose)) = (&self.scans[k], slam.keyframe_pose(k)) else {
+            return Ok(());
+        };
+        let grid = match (&mut self.rebuilding, into_rebuild) {
+            (Some(r), true) => &mut r.grid,
+            _ => &mut self.grid,
+        };
+        grid.insert(pose, scan).map_err(|e| GridError::InKeyframe {
+            index: k,
+            error: Box::new(e),
+        })
+    }
+
+    /// Inserts a scan at a known pose without SLAM (synthetic maps, replays of a finished run).
+    pub fn insert_at(&mut self, pose: Pose2, scan: &PreparedScan) -> Result<(), GridError> {
+        self.grid.insert(pose, scan)?;
+        self.version += 1;
+        Ok(())
+    }
+}

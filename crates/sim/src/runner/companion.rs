@@ -1,0 +1,415 @@
+//! The companion computer of an exploring vehicle, as it runs in simulation: on every lidar
+//! revolution the online SLAM places the scan, the explorer updates its live map and decides
+//! where to go (or that exploring is done), and seed 002's velocity field turns that into a
+//! velocity setpoint that keeps clear of what the scan sees. The flight part gets the SLAM pose
+//! as a pose fix and the setpoint through [`CompanionMessages`], never the SLAM itself.
+//!
+//! The mission from the companion's side: wait for the autopilot to hold after take-off, ask
+//! it to explore, explore until the explorer is done or the time left only covers the way home,
+//! then say so and fly the planned path home; the autopilot lands when it is there. Everything
+//! runs inline (the SLAM backend too), so a run is a function of its seed.
+
+use super::onboard_link::{
+    CompanionComputer, FlightLog, OnboardLink, WithCompanion, LARGE_SCAN_BEAMS, XV11_BEAMS,
+};
+use super::{Pilot, SetupError};
+use plumbline_core::geom::{normalize_angle, Pose2, Vec2};
+use plumbline_core::guidance::config::GuidanceConfig;
+use plumbline_core::guidance::step::{Guidance, GuidanceMode};
+use plumbline_core::matching::local_map::MapCell;
+use plumbline_core::msgs::{
+    CompanionMessages, CompanionSetpoint, FlightMode, MissionCommand, PoseFix, SetpointTarget,
+};
+use plumbline_core::scan::Scan;
+use plumbline_explore::{DoneReason, ExploreStep, Explorer, Path};
+use plumbline_slam::{local_map_cells, ScanPose, Slam, SlamConfig};
+use std::cell::RefCell;
+use std::rc::Rc;
+
+/// Wall segments one revolution may yield to the guidance.
+const WALL_SEGMENTS: usize = 64;
+/// The way home is planned again this often while exploring (its length sets when to turn
+/// back) and while returning, s.
+const HOME_PLAN_EVERY_S: f64 = 2.0;
+/// Speed assumed for the way home when deciding when to turn back, m/s (below the guidance's
+/// cruise speed: the field slows down near walls and in doors).
+const RETURN_SPEED_M_S: f64 = 0.25;
+/// Time kept for the final approach, the descent and the unforeseen, s.
+const RETURN_RESERVE_S: f64 = 30.0;
+/// Within this distance of home the companion sends the home point itself, m.
+const HOME_APPROACH_M: f32 = 0.5;
+/// Lookahead along the path home, m.
+const HOME_LOOKAHEAD_M: f32 = 1.0;
+/// Fastest turn the companion asks for, rad/s: the scan matcher on board loses a slow lidar
+/// when the heading sweeps much faster (0.5 rad/s is 3 degrees a URG-04LX revolution).
+const YAW_RATE_RAD_S: f32 = 0.5;
+/// One-sigma uncertainty sent with each SLAM pose: the SLAM reports none, and these are its
+/// measured errors on the simulated surveys (a few centimetres, about half a degree).
+const FIX_STD_M: f32 = 0.1;
+const FIX_STD_RAD: f32 = 0.03;
+/// Quality of a matched pose and of a predicted one (the autopilot refuses below 20).
+const QUALITY_MATCHED: u8 = 80;
+const QUALITY_PREDICTED: u8 = 10;
+/// An old keyframe moving by more than this means the map was corrected (a loop closure): the
+/// pose jumps, and the reset counter says so, m and rad.
+const RESET_JUMP_M: f32 = 0.05;
+const RESET_JUMP_RAD: f32 = 0.02;
+
+/// How the vehicle chooses where to go.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Strategy {
+    /// Seed 002: follow the walls (the heading rules choose).
+    WallFollow,
+    /// The nearest reachable frontier of the SLAM map, the leg to it flown by the field.
+    #[default]
+    Frontier,
+}
+
+impl Strategy {
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::WallFollow => "wall-follow",
+            Strategy::Frontier => "frontier",
+        }
+    }
+}
+
+/// Where the companion is in the mission.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    /// Until the autopilot holds after take-off.
+    Waiting,
+    Exploring,
+    Returning,
+    /// The autopilot is landing (or down): only poses are sent.
+    Finished,
+}
+
+/// Why exploring ended, for the summary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExploreEnd {
+    Explorer(DoneReason),
+    /// The time left covered only the way home.
+    TimeBudget,
+}
+
+/// What the companion did, kept for the score and the plots.
+#[derive(Clone, Debug, Default)]
+pub struct CompanionLog {
+    /// Time exploring ended and why.
+    pub explore_end: Option<(f64, ExploreEnd)>,
+    /// The SLAM pose of every revolution (map frame, which is the pose of the first scan).
+    pub poses: Vec<(f64, Pose2)>,
+    /// Revolutions whose scan match failed (the pose was predicted).
+    pub predicted: usize,
+    /// Map corrections that moved the pose (reset counter bumps).
+    pub resets: usize,
+    /// Revolutions the live map could not take in.
+    pub map_errors: usize,
+    /// Length of the last planned way home, m.
+    pub path_home_m: Option<f32>,
+}
+
+/// SLAM, explorer and guidance of one flight.
+pub struct ExploreCompanion<'m, const N: usize> {
+    slam: Slam<'m, N>,
+    explorer: Rc<RefCell<Explorer>>,
+    guidance: Guidance<WALL_SEGMENTS>,
+    strategy: Strategy,
+    /// Whether the vehicle turns to the guidance's heading (a lidar with a blind sector).
+    turns: bool,
+    /// The flight must be back on the ground by then, s.
+    end_s: f64,
+    phase: Phase,
+    /// The way home and when it was planned.
+    home_path: Option<(f64, Option<Path>)>,
+    last: Option<ScanPose>,
+    /// Time of the previous revolution, s.
+    last_t_s: Option<f64>,
+    reset_counter: u8,
+    log: Rc<RefCell<CompanionLog>>,
+}
+
+impl<'m, const N: usize> ExploreCompanion<'m, N> {
+    /// A companion flying `strategy` until `end_s` at the latest; the explorer and the log are
+    /// shared with the caller, who reads them after the flight.
+    pub fn new(
+        slam: Slam<'m, N>,
+        explorer: Rc<RefCell<Explorer>>,
+        guidance: GuidanceConfig,
+        strategy: Strategy,
+        turns: bool,
+        end_s: f64,
+        log: Rc<RefCell<CompanionLog>>,
+    ) -> Result<Self, String> {
+        let guidance = Guidance::new(guidance).map_err(|e| e.to_string())?;
+        Ok(Self {
+            slam,
+            explorer,
+            guidance,
+            strategy,
+            turns,
+            end_s,
+            phase: Phase::Waiting,
+            home_path: None,
+            last: None,
+            last_t_s: None,
+            reset_counter: 0,
+            log,
+        })
+    }
+
+    /// The pose fix for `at`, with the reset counter bumped when a map correction moved the
+    /// keyframe the previous scan was anchored to.
+    fn fix(&mut self, t_s: f64, at: &ScanPose) -> PoseFix {
+        if let Some((last, k)) = self.last.and_then(|l| l.keyframe.map(|k| (l, k))) {
+            let then = last.pose.compose(last.relative.inverse());
+            if let Some(now) = self.slam.keyframe_pose(k) {
+                let (d, a) = then.distance_to(now);
+                if d > RESET_JUMP_M || a > RESET_JUMP_RAD {
+                    self.reset_counter = self.reset_counter.wrapping_add(1);
+                    self.log.borrow_mut().resets += 1;
+                }
+            }
+        }
+        let (s2, r2) = (FIX_STD_M * FIX_STD_M, FIX_STD_RAD * FIX_STD_RAD);
+        PoseFix {
+            t_s,
+            position_m: [at.pose.x, at.pose.y],
+            yaw_rad: at.pose.theta,
+            covariance: [[s2, 0.0, 0.0], [0.0, s2, 0.0], [0.0, 0.0, r2]],
+            quality_pct: Some(if at.predicted {
+                QUALITY_PREDICTED
+            } else {
+                QUALITY_MATCHED
+            }),
+            reset_counter: self.reset_counter,
+        }
+    }
+
+    /// The way home from `pose`, planned again when the last plan is older than
+    /// [`HOME_PLAN_EVERY_S`].
+    fn path_home(&mut self, t_s: f64, pose: Pose2) -> Option<&Path> {
+        let fresh = self
+            .home_path
+            .as_ref()
+            .is_some_and(|(t, _)| t_s - t < HOME_PLAN_EVERY_S);
+        if !fresh {
+            let path = self.explorer.borrow_mut().path_home(pose);
+            self.log.borrow_mut().path_home_m = path.as_ref().map(|p| p.length_m);
+            self.home_path = Some((t_s, path));
+        }
+        self.home_path.as_ref().and_then(|(_, p)| p.as_ref())
+    }
+
+    /// A velocity setpoint from the field toward `mode`'s goal.
+    fn fly(
+        &mut self,
+        t_s: f64,
+        scan: &Scan<N>,
+        pose: Pose2,
+        mode: GuidanceMode,
+    ) -> CompanionSetpoint {
+        let cmd = self.guidance.step(scan, pose, mode);
+        // The heading turns toward the guidance's at most at YAW_RATE_RAD_S, and not at all
+        // with a lidar that sees all round: the field is flown in the world frame, so turning
+        // would buy nothing and cost the scan matcher accuracy.
+        let dt = self
+            .last_t_s
+            .map_or(0.0, |t| (t_s - t) as f32)
+            .clamp(0.0, 1.0);
+        let step = if self.turns { YAW_RATE_RAD_S * dt } else { 0.0 };
+        let turn = cmd
+            .yaw_rad
+            .map_or(0.0, |y| normalize_angle(y - pose.theta).clamp(-step, step));
+        CompanionSetpoint {
+            t_s,
+            target: SetpointTarget::Velocity {
+                velocity_m_s: cmd.velocity_world_m_s,
+                yaw_rad: normalize_angle(pose.theta + turn),
+            },
+        }
+    }
+
+    /// Exploring: the next setpoint, or the decision to go home.
+    fn explore(&mut self, t_s: f64, scan: &Scan<N>, pose: Pose2, msgs: &mut CompanionMessages) {
+        let home_m = self.path_home(t_s, pose).map(|p| p.length_m);
+        msgs.path_home_m = home_m;
+        // Without a way home on the map (yet) the straight line is the best guess.
+        let straight = || {
+            let home = self.explorer.borrow().home();
+            home.map_or(0.0, |h| (h - pose.translation()).norm())
+        };
+        let home_m = f64::from(home_m.unwrap_or_else(straight));
+        let out_of_time = t_s + home_m / RETURN_SPEED_M_S + RETURN_RESERVE_S >= self.end_s;
+        let step = self.explorer.borrow_mut().next(pose);
+        let end = match step {
+            ExploreStep::Done(reason) => Some(ExploreEnd::Explorer(reason)),
+            _ if out_of_time => Some(ExploreEnd::TimeBudget),
+            ExploreStep::Waypoint(_) => None,
+        };
+        if let Some(end) = end {
+            self.log.borrow_mut().explore_end = Some((t_s, end));
+            self.phase = Phase::Returning;
+            self.home_path = None;
+            return self.go_home(t_s, scan, pose, msgs);
+        }
+        let mode = match (self.strategy, step) {
+            (Strategy::Frontier, ExploreStep::Waypoint(w)) => GuidanceMode::TowardWaypoint {
+                world_m: [w.x, w.y],
+            },
+            _ => GuidanceMode::WallFollow,
+        };
+        msgs.setpoint = Some(self.fly(t_s, scan, pose, mode));
+    }
+
+    /// Returning: the path home flown by the field, the home point itself at the end.
+    fn go_home(&mut self, t_s: f64, scan: &Scan<N>, pose: Pose2, msgs: &mut CompanionMessages) {
+        msgs.command = Some(MissionCommand::ExploreDone);
+        let Some(home) = self.explorer.borrow().home() else {
+            return;
+        };
+        let p = pose.translation();
+        let path = self.path_home(t_s, pose).cloned();
+        msgs.path_home_m = path.as_ref().map(|p| p.length_m);
+        if (home - p).norm() <= HOME_APPROACH_M {
+            msgs.setpoint = Some(CompanionSetpoint {
+                t_s,
+                target: SetpointTarget::Position {
+                    position_m: [home.x, home.y],
+                    yaw_rad: pose.theta,
+                },
+            });
+            return;
+        }
+        let target: Vec2 = path.map_or(home, |path| path.lookahead(p, HOME_LOOKAHEAD_M));
+        let mode = GuidanceMode::TowardWaypoint {
+            world_m: [target.x, target.y],
+        };
+        msgs.setpoint = Some(self.fly(t_s, scan, pose, mode));
+    }
+}
+
+impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
+    fn revolution(&mut self, scan: &Scan<N>, flight: &FlightLog) -> CompanionMessages {
+        let t_s = scan.stamp_s;
+        let at = self.slam.add_scan(scan, None);
+        if self
+            .explorer
+            .borrow_mut()
+            .observe(&self.slam, scan, &at)
+            .is_err()
+        {
+            self.log.borrow_mut().map_errors += 1;
+        }
+        let mut msgs = CompanionMessages {
+            pose: Some(self.fix(t_s, &at)),
+            ..CompanionMessages::default()
+        };
+        {
+            let mut log = self.log.borrow_mut();
+            log.poses.push((t_s, at.pose));
+            log.predicted += usize::from(at.predicted);
+        }
+        self.last = Some(at);
+        let mode = flight.final_mode();
+        if matches!(mode, FlightMode::Land | FlightMode::Killed)
+            || (mode == FlightMode::Disarmed && self.phase != Phase::Waiting)
+        {
+            self.phase = Phase::Finished;
+        }
+        match self.phase {
+            Phase::Waiting if mode == FlightMode::Hold => {
+                self.phase = Phase::Exploring;
+                msgs.command = Some(MissionCommand::StartExplore);
+                self.explore(t_s, scan, at.pose, &mut msgs);
+            }
+            Phase::Exploring => {
+                if mode == FlightMode::Hold {
+                    msgs.command = Some(MissionCommand::StartExplore);
+                }
+                self.explore(t_s, scan, at.pose, &mut msgs);
+            }
+            Phase::Returning => self.go_home(t_s, scan, at.pose, &mut msgs),
+            Phase::Waiting | Phase::Finished => {}
+        }
+        self.last_t_s = Some(t_s);
+        msgs
+    }
+}
+
+/// The onboard stack and its companion for one flight, before boarding: the companion's SLAM
+/// borrows its local map's cells, so whoever flies the crew owns them ([`Self::local_map`])
+/// for as long as the flight lasts.
+pub struct ExploreCrew<const N: usize> {
+    pub link: OnboardLink<N>,
+    pub companion: CompanionParts,
+}
+
+/// What the companion is made of: its settings and the records it shares with the caller.
+#[derive(Clone)]
+pub struct CompanionParts {
+    pub slam: SlamConfig,
+    pub explorer: Rc<RefCell<Explorer>>,
+    pub guidance: GuidanceConfig,
+    pub strategy: Strategy,
+    /// Whether the vehicle turns to the guidance's heading: only a lidar with a blind sector
+    /// needs to face where it goes.
+    pub turns: bool,
+    /// The flight must be back on the ground by then, s.
+    pub end_s: f64,
+    pub log: Rc<RefCell<CompanionLog>>,
+}
+
+impl<const N: usize> ExploreCrew<N> {
+    /// Cells for the SLAM's local map.
+    pub fn local_map(&self) -> Vec<MapCell> {
+        local_map_cells(&self.companion.slam)
+    }
+
+    /// The pilot: the stack with the companion on board, its SLAM on `cells` (run inline, so
+    /// the flight is deterministic).
+    pub fn board(self, cells: &mut [MapCell]) -> Result<Pilot<'_>, SetupError> {
+        let parts = self.companion;
+        let slam = Slam::new(parts.slam, cells, false)
+            .map_err(|e| SetupError::Config(format!("companion SLAM: {}", e.0)))?;
+        let companion = ExploreCompanion::new(
+            slam,
+            parts.explorer,
+            parts.guidance,
+            parts.strategy,
+            parts.turns,
+            parts.end_s,
+            parts.log,
+        )
+        .map_err(SetupError::Config)?;
+        Ok(Pilot::Onboard(Box::new(WithCompanion {
+            link: self.link,
+            companion: Box::new(companion),
+        })))
+    }
+}
+
+/// An exploring crew for either scan size.
+pub enum AnyExploreCrew {
+    Small(ExploreCrew<XV11_BEAMS>),
+    Large(ExploreCrew<LARGE_SCAN_BEAMS>),
+}
+
+impl AnyExploreCrew {
+    /// Cells for the SLAM's local map.
+    pub fn local_map(&self) -> Vec<MapCell> {
+        match self {
+            AnyExploreCrew::Small(c) => c.local_map(),
+            AnyExploreCrew::Large(c) => c.local_map(),
+        }
+    }
+
+    /// The pilot, its SLAM on `cells` (see [`ExploreCrew::board`]).
+    pub fn board(self, cells: &mut [MapCell]) -> Result<Pilot<'_>, SetupError> {
+        match self {
+            AnyExploreCrew::Small(c) => c.board(cells),
+            AnyExploreCrew::Large(c) => c.board(cells),
+        }
+    }
+}

@@ -1,0 +1,131 @@
+//! The `explore` scenario end to end: the onboard stack and its companion (SLAM, explorer,
+//! guidance) fly a world they have never seen, scored against its truth. Runs are short; the
+//! ten-minute flights of the targets are the benchmarks' (`scripts/explore-seeds.sh`).
+
+use plumbline_sim::runner::companion::Strategy;
+use plumbline_sim::runner::{Recorder, SimConfig, StateSample};
+use plumbline_sim::scenario::{self, Options, Report};
+use plumbline_sim::sensors::lidar::LidarProfile;
+use plumbline_sim::world::World;
+
+const CLOSED_ROOM: &str = include_str!("../worlds/explore/closed-room.world");
+const NARROW_GAP: &str = include_str!("../worlds/explore/narrow-gap.world");
+
+/// Keeps the true states.
+#[derive(Default)]
+struct States(Vec<StateSample>);
+
+impl Recorder for States {
+    fn state(&mut self, s: &StateSample) {
+        self.0.push(*s);
+    }
+}
+
+fn explore(
+    world: World,
+    seed: u64,
+    duration_s: f64,
+    strategy: Strategy,
+) -> (Report, Vec<StateSample>) {
+    let mut config = SimConfig::new(world, LidarProfile::xv11(), seed);
+    let options = Options {
+        duration_s: Some(duration_s),
+        strategy,
+        ..Options::default()
+    };
+    let flight = scenario::find("explore")
+        .unwrap()
+        .prepare(&options, &mut config)
+        .unwrap();
+    let mut states = States::default();
+    let report = scenario::fly(&config, flight, &mut states).unwrap();
+    (report, states.0)
+}
+
+fn shipped(name: &str) -> World {
+    World::shipped(name).unwrap().unwrap()
+}
+
+#[test]
+fn the_hard_worlds_parse() {
+    for (name, text) in [
+        ("closed-room", CLOSED_ROOM),
+        ("narrow-gap", NARROW_GAP),
+        ("dead-end", include_str!("../worlds/explore/dead-end.world")),
+        (
+            "long-corridor",
+            include_str!("../worlds/explore/long-corridor.world"),
+        ),
+        (
+            "left-doors",
+            include_str!("../worlds/explore/left-doors.world"),
+        ),
+    ] {
+        let w = World::parse(text).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(w.name, name);
+        w.check_free([w.start[0], w.start[1]], 0.35, "start")
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+}
+
+#[test]
+fn a_short_seeded_exploration_of_the_office_repeats_exactly_and_gets_somewhere() {
+    let (a, states_a) = explore(shipped("office"), 3, 40.0, Strategy::Frontier);
+    let (b, states_b) = explore(shipped("office"), 3, 40.0, Strategy::Frontier);
+    assert_eq!(a.outcome, b.outcome);
+    assert_eq!(a.score, b.score);
+    assert_eq!(states_a, states_b);
+    let e = a.score.explore.as_ref().unwrap();
+    // Take-off and the first half minute: the start room and the corridor around it are seen,
+    // and the vehicle has moved off its take-off point without touching anything.
+    assert!(e.explored_fraction > 0.1, "{e:?}");
+    assert!(a.outcome.distance_flown_m > 2.0, "{:?}", a.outcome);
+    assert_eq!(e.collisions, 0, "{e:?}");
+}
+
+#[test]
+fn a_gap_narrower_than_the_vehicle_is_never_flown_through() {
+    let world = World::parse(NARROW_GAP).unwrap();
+    for strategy in [Strategy::Frontier, Strategy::WallFollow] {
+        let (report, states) = explore(world.clone(), 5, 150.0, strategy);
+        let e = report.score.explore.as_ref().unwrap();
+        assert_eq!(e.collisions, 0, "{strategy:?}: {e:?}");
+        // The wall between the rooms is x = 6 for y > 2; the only way across it is the
+        // corridor to the south (y < 2).
+        for w in states.windows(2) {
+            let (p, q) = (w[0].position, w[1].position);
+            let crossed = (p.x - 6.0).signum() != (q.x - 6.0).signum();
+            assert!(
+                !(crossed && p.y.min(q.y) > 2.0),
+                "{strategy:?}: crossed the wall at ({:.2}, {:.2}), t = {:.1} s",
+                q.x,
+                q.y,
+                w[1].t_s
+            );
+        }
+    }
+}
+
+#[test]
+fn a_room_without_a_way_out_is_explored_and_the_vehicle_lands_at_home() {
+    let (report, _) = explore(
+        World::parse(CLOSED_ROOM).unwrap(),
+        4,
+        240.0,
+        Strategy::Frontier,
+    );
+    let e = report.score.explore.as_ref().unwrap();
+    assert!(e.explored_fraction > 0.9, "{e:?}");
+    assert!(e.explore_end.is_some(), "{e:?}");
+    assert!(e.returned_home && e.landed, "{e:?}");
+    assert_eq!(e.collisions, 0, "{e:?}");
+}
+
+#[test]
+fn a_person_walking_across_the_room_causes_no_collision() {
+    // The room's person walks back and forth across its middle, where the vehicle explores.
+    let (report, _) = explore(shipped("room"), 8, 90.0, Strategy::Frontier);
+    let e = report.score.explore.as_ref().unwrap();
+    assert_eq!(e.collisions, 0, "{e:?}");
+    assert!(e.min_clearance_m >= 0.35, "{e:?}");
+}
