@@ -6,6 +6,7 @@
 //! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
 //! to. The runner never hands the stack ground truth; the log holds only onboard values.
 
+use crate::runner::mission::Mission;
 use crate::runner::{FlightSoftware, SensorFrame, SetupError, STATE_RATE_HZ};
 use crate::sensors::lidar::{LidarProfile, LidarScan};
 use crate::vehicle::{Frame, VehicleParams};
@@ -54,6 +55,8 @@ pub struct Script {
     pub radio: Vec<(f64, PilotInput)>,
     /// The lidar stops delivering revolutions from this time on.
     pub lidar_dies_at_s: Option<f64>,
+    /// Setpoints streamed to the stack while the mission lasts.
+    pub mission: Option<Mission>,
 }
 
 impl Script {
@@ -68,6 +71,7 @@ impl Script {
                 },
             )],
             lidar_dies_at_s: None,
+            mission: None,
         }
     }
 
@@ -102,6 +106,8 @@ pub struct FlightLog {
     pub samples: Vec<OnboardSample>,
     /// Scan points the matcher's dynamic-object test rejected (seed 000 sec. 4.2).
     pub rejected_points: u64,
+    /// Time the mixer had to cut the controller's request to fit the motors, s.
+    pub saturation_s: f64,
     /// Sum over Hold steps and motors of the squared rate of change of the command, 1/s^2.
     jitter_sum: f64,
     jitter_terms: u64,
@@ -144,6 +150,8 @@ pub struct OnboardLink<const N: usize> {
     /// The revolution being handed over, in the onboard format.
     scan: Box<Scan<N>>,
     next_sample_s: f64,
+    /// The autopilot's count of saturated mixer steps after the previous step.
+    saturated_steps: u32,
     log: Rc<RefCell<FlightLog>>,
 }
 
@@ -169,6 +177,7 @@ impl<const N: usize> OnboardLink<N> {
             last_imu: ImuSample::default(),
             scan: Box::new(Scan::new(0.0)),
             next_sample_s: 0.0,
+            saturated_steps: 0,
             log: log.clone(),
         };
         Ok((link, log))
@@ -217,9 +226,15 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             scan_match: None,
             battery: Some(frame.battery),
             pilot: self.script.radio_at(frame.t_s),
+            mission: self.script.mission.as_ref().and_then(|m| m.setpoint(frame.t_s)),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         let mut log = self.log.borrow_mut();
+        let saturated = self.onboard.autopilot().faults().mixer_saturated;
+        if saturated != self.saturated_steps {
+            self.saturated_steps = saturated;
+            log.saturation_s += dt_s;
+        }
         if log.modes.last().is_none_or(|(_, m)| *m != out.mode) {
             log.modes.push((frame.t_s, out.mode));
         }
