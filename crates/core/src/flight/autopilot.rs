@@ -285,7 +285,11 @@ impl Autopilot {
     /// A setpoint with a non-finite value is ignored whole.
     fn follow(&mut self, mode: FlightMode, mission: Option<MissionSetpoint>) -> Option<[f32; 2]> {
         let m = mission.filter(|_| mode == FlightMode::Hold)?;
-        let finite = m.position_m.iter().chain(&m.velocity_m_s).all(|v| v.is_finite())
+        let finite = m
+            .position_m
+            .iter()
+            .chain(&m.velocity_m_s)
+            .all(|v| v.is_finite())
             && m.yaw_rad.is_finite();
         if !finite {
             self.faults.bad_mission = self.faults.bad_mission.saturating_add(1);

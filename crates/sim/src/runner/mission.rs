@@ -69,8 +69,11 @@ mod tests {
 
     #[test]
     fn the_path_is_linear_between_points_with_its_slope_as_velocity() {
-        let m = Mission::new(vec![(1.0, [0.0, 0.0]), (3.0, [2.0, 0.0]), (4.0, [2.0, 1.0])], 1.0)
-            .unwrap();
+        let m = Mission::new(
+            vec![(1.0, [0.0, 0.0]), (3.0, [2.0, 0.0]), (4.0, [2.0, 1.0])],
+            1.0,
+        )
+        .unwrap();
         assert_eq!(m.at(0.5), None);
         assert_eq!(m.at(1.0), Some(([0.0, 0.0], [1.0, 0.0])));
         assert_eq!(m.at(2.0), Some(([1.0, 0.0], [1.0, 0.0])));
@@ -78,7 +81,10 @@ mod tests {
         assert_eq!(m.at(4.0), Some(([2.0, 1.0], [0.0, 1.0])));
         assert_eq!(m.at(4.1), None);
         let sp = m.setpoint(2.0).unwrap();
-        assert_eq!((sp.position_m, sp.velocity_m_s), ([1.0, 0.0, 1.0], [1.0, 0.0]));
+        assert_eq!(
+            (sp.position_m, sp.velocity_m_s),
+            ([1.0, 0.0, 1.0], [1.0, 0.0])
+        );
     }
 
     #[test]

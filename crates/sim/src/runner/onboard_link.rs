@@ -226,7 +226,11 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             scan_match: None,
             battery: Some(frame.battery),
             pilot: self.script.radio_at(frame.t_s),
-            mission: self.script.mission.as_ref().and_then(|m| m.setpoint(frame.t_s)),
+            mission: self
+                .script
+                .mission
+                .as_ref()
+                .and_then(|m| m.setpoint(frame.t_s)),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         let mut log = self.log.borrow_mut();

@@ -55,6 +55,7 @@ pub(super) fn flight(
             ..CascadeConfig::soft()
         };
     }
+    let mission = script.mission.clone();
     let (pilot, log) = if config.lidar.beams <= XV11_BEAMS {
         let (link, log) =
             OnboardLink::<XV11_BEAMS>::new(&config.lidar, odometry, autopilot, script)
@@ -66,5 +67,5 @@ pub(super) fn flight(
                 .map_err(ScenarioError::Setup)?;
         (Pilot::Onboard(Box::new(link)), log)
     };
-    Ok(Flight::onboard(pilot, log, push, config))
+    Ok(Flight::onboard(pilot, log, push, mission, config))
 }

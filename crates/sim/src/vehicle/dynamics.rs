@@ -17,8 +17,8 @@
 //!   evaluated three times a step instead of four, and the body carries 13 states, not 21.
 
 use crate::math::{Quat, Vec3};
-use crate::vehicle::motors::{MotorModel, Rotors};
 use crate::vehicle::model_error::{ModelError, TrueBody};
+use crate::vehicle::motors::{MotorModel, Rotors};
 use crate::vehicle::{VehicleParams, GRAVITY};
 use core::cell::Cell;
 

@@ -119,7 +119,10 @@ impl ModelError {
             }
         }
         let body = self.body(v, true);
-        let weakest = body.rotor_factor.iter().fold(f64::INFINITY, |a, b| a.min(*b));
+        let weakest = body
+            .rotor_factor
+            .iter()
+            .fold(f64::INFINITY, |a, b| a.min(*b));
         // The weak rotor's pair must still balance the others in roll, pitch and yaw, so
         // the usable thrust is four times the weakest rotor's.
         let usable = 4.0 * weakest * v.thrust_coeff * v.max_rotor_speed_radps.powi(2);
