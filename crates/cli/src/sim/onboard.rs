@@ -7,6 +7,7 @@ use crate::plot::write_png;
 use crate::report::CliError;
 use clap::Args;
 use plotters::prelude::*;
+use plumbline_core::control::mrac::FallbackReason;
 use plumbline_core::msgs::{FailsafeReason, FlightMode};
 use plumbline_sim::runner::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
@@ -19,7 +20,8 @@ use std::path::Path;
 #[derive(Args, Debug)]
 pub struct ClosedLoopArgs {
     /// Who flies: `pid` (the onboard cascade; default for the closed-loop scenarios), `mrac`
-    /// (not implemented yet) or `test-pilot` (the simulator's ground-truth pilot: `survey`,
+    /// (the same cascade with model-reference adaptive control in place of its position and
+    /// velocity loops) or `test-pilot` (the simulator's ground-truth pilot: `survey`,
     /// and `hold` as a sensor-log generator).
     #[arg(long, value_parser = ["pid", "mrac", "test-pilot"])]
     pub controller: Option<String>,
@@ -73,6 +75,15 @@ fn failsafe_name(r: FailsafeReason) -> &'static str {
     }
 }
 
+fn fallback_name(r: FallbackReason) -> &'static str {
+    match r {
+        FallbackReason::NonFinite => "non_finite",
+        FallbackReason::WeightBound => "weight_bound",
+        FallbackReason::PersistentHedge => "persistent_hedge",
+        FallbackReason::InvalidConfig => "invalid_config",
+    }
+}
+
 fn mode_name(m: FlightMode) -> &'static str {
     match m {
         FlightMode::Disarmed => "disarmed",
@@ -109,6 +120,11 @@ pub fn extend_summary(
         "recovery_s": score.recovery_s,
         "motor_jitter": log.motor_jitter(),
         "saturation_s": log.saturation_s,
+        "adaptive_weight_norm": log.adaptive_weight_norm,
+        "max_adaptive_weight_norm": log.max_adaptive_weight_norm,
+        "adaptive_fallback": log.adaptive_fallback.map(|(t_s, reason)| {
+            json!({ "t_s": t_s, "reason": fallback_name(reason) })
+        }),
         "failsafe": log.failsafe.map(failsafe_name),
         "rejected_points": log.rejected_points,
         "modes": modes,

@@ -11,6 +11,7 @@ use crate::runner::{FlightSoftware, SensorFrame, SetupError, STATE_RATE_HZ};
 use crate::sensors::lidar::{LidarProfile, LidarScan};
 use crate::vehicle::{Frame, VehicleParams};
 use plumbline_core::control::airframe::Airframe;
+use plumbline_core::control::mrac::FallbackReason;
 use plumbline_core::flight::autopilot::AutopilotConfig;
 use plumbline_core::flight::onboard::Onboard;
 use plumbline_core::matching::OdometryConfig;
@@ -108,6 +109,11 @@ pub struct FlightLog {
     pub rejected_points: u64,
     /// Time the mixer had to cut the controller's request to fit the motors, s.
     pub saturation_s: f64,
+    /// The MRAC's adaptive weight norm at the end and at its largest (`None` with the PID).
+    pub adaptive_weight_norm: Option<f64>,
+    pub max_adaptive_weight_norm: Option<f64>,
+    /// When and why the MRAC's adaptive element first fell back to the baseline, if it did.
+    pub adaptive_fallback: Option<(f64, FallbackReason)>,
     /// Sum over Hold steps and motors of the squared rate of change of the command, 1/s^2.
     jitter_sum: f64,
     jitter_terms: u64,
@@ -150,8 +156,6 @@ pub struct OnboardLink<const N: usize> {
     /// The revolution being handed over, in the onboard format.
     scan: Box<Scan<N>>,
     next_sample_s: f64,
-    /// The autopilot's count of saturated mixer steps after the previous step.
-    saturated_steps: u32,
     log: Rc<RefCell<FlightLog>>,
 }
 
@@ -177,7 +181,6 @@ impl<const N: usize> OnboardLink<N> {
             last_imu: ImuSample::default(),
             scan: Box::new(Scan::new(0.0)),
             next_sample_s: 0.0,
-            saturated_steps: 0,
             log: log.clone(),
         };
         Ok((link, log))
@@ -234,17 +237,23 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         let mut log = self.log.borrow_mut();
-        let saturated = self.onboard.autopilot().faults().mixer_saturated;
-        if saturated != self.saturated_steps {
-            self.saturated_steps = saturated;
-            log.saturation_s += dt_s;
-        }
         if log.modes.last().is_none_or(|(_, m)| *m != out.mode) {
             log.modes.push((frame.t_s, out.mode));
         }
         log.failsafe = out.failsafe.or(log.failsafe);
         log.last_estimate = out.estimate;
         log.rejected_points = self.onboard.rejected_points();
+        let autopilot = self.onboard.autopilot();
+        log.saturation_s = autopilot.faults().saturated_s;
+        if let Some(mrac) = autopilot.mrac() {
+            let norm = f64::from(mrac.weight_norm());
+            log.adaptive_weight_norm = Some(norm);
+            log.max_adaptive_weight_norm =
+                Some(log.max_adaptive_weight_norm.map_or(norm, |m| m.max(norm)));
+            if log.adaptive_fallback.is_none() {
+                log.adaptive_fallback = mrac.fallback().map(|r| (frame.t_s, r));
+            }
+        }
         log.record(dt_s, out.mode, out.motors.throttle_norm);
         if frame.t_s >= self.next_sample_s {
             self.next_sample_s = frame.t_s + 1.0 / STATE_RATE_HZ;
