@@ -7,11 +7,12 @@ use crate::plot::write_png;
 use crate::report::CliError;
 use clap::Args;
 use plotters::prelude::*;
+use plumbline_core::control::mrac::FallbackReason;
 use plumbline_core::msgs::{FailsafeReason, FlightMode};
 use plumbline_sim::runner::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
 use plumbline_sim::scenario::score::OnboardScore;
-use plumbline_sim::scenario::{Controller, Options, Tuning};
+use plumbline_sim::scenario::{Controller, Options, TrackShape, Tuning};
 use serde_json::{json, Value};
 use std::path::Path;
 
@@ -32,6 +33,10 @@ pub struct ClosedLoopArgs {
     /// what the people in `hold-people` cost without it.
     #[arg(long)]
     pub no_rejection: bool,
+    /// The path of `--scenario track`: a 3 m x 3 m `square` with a corner at the start, or a
+    /// figure of `eight` in a 3 m x 3 m box centred on the start.
+    #[arg(long, default_value = "square", value_parser = ["square", "eight"])]
+    pub track: String,
 }
 
 impl ClosedLoopArgs {
@@ -46,11 +51,16 @@ impl ClosedLoopArgs {
             "soft" => Tuning::Soft,
             _ => Tuning::Aggressive,
         };
+        let track = match self.track.as_str() {
+            "eight" => TrackShape::Eight,
+            _ => TrackShape::Square,
+        };
         Options {
             controller,
             tuning,
             dynamic_rejection: !self.no_rejection,
             duration_s,
+            track,
         }
     }
 }
@@ -62,6 +72,15 @@ fn failsafe_name(r: FailsafeReason) -> &'static str {
         FailsafeReason::BatteryLow => "battery_low",
         FailsafeReason::BatteryCritical => "battery_critical",
         FailsafeReason::KillSwitch => "kill_switch",
+    }
+}
+
+fn fallback_name(r: FallbackReason) -> &'static str {
+    match r {
+        FallbackReason::NonFinite => "non_finite",
+        FallbackReason::WeightBound => "weight_bound",
+        FallbackReason::PersistentHedge => "persistent_hedge",
+        FallbackReason::InvalidConfig => "invalid_config",
     }
 }
 
@@ -93,12 +112,19 @@ pub fn extend_summary(
     let extra = json!({
         "controller": args.controller.as_deref().unwrap_or("pid"),
         "tuning": args.tuning,
+        "track": (summary["scenario"] == "track").then_some(args.track.as_str()),
         "dynamic_rejection": !args.no_rejection,
         "people": config.people,
         "landed": score.landed,
         "push_max_error_m": score.push_max_error_m,
         "recovery_s": score.recovery_s,
         "motor_jitter": log.motor_jitter(),
+        "saturation_s": log.saturation_s,
+        "adaptive_weight_norm": log.adaptive_weight_norm,
+        "max_adaptive_weight_norm": log.max_adaptive_weight_norm,
+        "adaptive_fallback": log.adaptive_fallback.map(|(t_s, reason)| {
+            json!({ "t_s": t_s, "reason": fallback_name(reason) })
+        }),
         "failsafe": log.failsafe.map(failsafe_name),
         "rejected_points": log.rejected_points,
         "modes": modes,

@@ -151,6 +151,10 @@ pub struct CascadeSetpoint {
     /// World (x, y) to hold (m); `None` flies level with no horizontal loops, for when the
     /// horizontal estimate cannot be trusted (estimate-invalid landing).
     pub horizontal_m: Option<[f32; 2]>,
+    /// How fast the horizontal setpoint moves, world frame (m/s): added to the position loop's
+    /// output, so a moving setpoint is followed without the lag a position error would need
+    /// to ask for that speed. `None` for a fixed setpoint.
+    pub feed_forward_m_s: Option<[f32; 2]>,
     pub vertical: Vertical,
     pub yaw_rad: f32,
 }
@@ -366,6 +370,12 @@ impl Cascade {
                     let x = state.position_m[axis];
                     *out = self.position[axis].update(target[axis], x, 0.0, dt, false)?;
                 }
+                if let Some(ff) = setpoint.feed_forward_m_s {
+                    if !(ff[0].is_finite() && ff[1].is_finite()) {
+                        return Err(PidError::NonFinite);
+                    }
+                    v = [v[0] + ff[0], v[1] + ff[1]];
+                }
                 Some(v)
             }
             None => {
@@ -506,6 +516,7 @@ mod tests {
     fn hold(p: [f32; 3]) -> CascadeSetpoint {
         CascadeSetpoint {
             horizontal_m: Some([p[0], p[1]]),
+            feed_forward_m_s: None,
             vertical: Vertical::Height(p[2]),
             yaw_rad: 0.0,
         }
@@ -598,6 +609,7 @@ mod tests {
         s.velocity_m_s = [0.5, 0.5, 0.0];
         let sp = CascadeSetpoint {
             horizontal_m: None,
+            feed_forward_m_s: None,
             vertical: Vertical::ClimbRate(-0.5),
             yaw_rad: 0.0,
         };

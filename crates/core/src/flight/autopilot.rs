@@ -16,8 +16,8 @@ use crate::control::sas::{self, SasConfig};
 use crate::estimate::ekf::Outcome;
 use crate::estimate::estimator::{Estimator, EstimatorConfig, EstimatorCounters, Situation};
 use crate::msgs::{
-    EstimatedState, FailsafeReason, FlightMode, FrameKind, Inputs, MotorCommands, Outputs,
-    PilotInput, PositionSetpoint, ScanMatchStatus,
+    EstimatedState, FailsafeReason, FlightMode, FrameKind, Inputs, MissionSetpoint, MotorCommands,
+    Outputs, PilotInput, PositionSetpoint, ScanMatchStatus,
 };
 
 /// Everything the autopilot can be configured with; defaults are for the nominal 1 kg,
@@ -106,6 +106,8 @@ pub struct FaultCounters {
     pub control_errors: u32,
     /// Steps where the mixer had to cut the request to fit the motors.
     pub mixer_saturated: u32,
+    /// Mission setpoints with a non-finite value (ignored).
+    pub bad_mission: u32,
     /// Time the mixer spent cutting requests, s (`mixer_saturated` in seconds).
     pub saturated_s: f64,
 }
@@ -244,7 +246,11 @@ impl Autopilot {
         let failsafe = self.supervisor.failsafe();
 
         // ---- guide: what this mode asks for ----
-        let setpoint = self.guide(mode, failsafe, &estimate);
+        let mission = self.follow(mode, inputs.mission);
+        let mut setpoint = self.guide(mode, failsafe, &estimate);
+        if let Some(sp) = setpoint.as_mut() {
+            sp.feed_forward_m_s = mission;
+        }
 
         // ---- control: cascade in the autonomous modes, rate damping in manual ----
         let airborne = estimate.position_m[2] > self.config.landing.ground_height_m;
@@ -321,6 +327,29 @@ impl Autopilot {
         self.mode = mode;
     }
 
+    /// A mission setpoint, in Hold, becomes the hold point (so the vehicle stays where the
+    /// mission left it when the setpoints stop); returns its velocity to feed forward. Other
+    /// modes ignore the mission: takeoff, landing and failsafes keep their own setpoints.
+    /// A setpoint with a non-finite value is ignored whole.
+    fn follow(&mut self, mode: FlightMode, mission: Option<MissionSetpoint>) -> Option<[f32; 2]> {
+        let m = mission.filter(|_| mode == FlightMode::Hold)?;
+        let finite = m
+            .position_m
+            .iter()
+            .chain(&m.velocity_m_s)
+            .all(|v| v.is_finite())
+            && m.yaw_rad.is_finite();
+        if !finite {
+            self.faults.bad_mission = self.faults.bad_mission.saturating_add(1);
+            return None;
+        }
+        self.home = PositionSetpoint {
+            position_m: m.position_m,
+            yaw_rad: m.yaw_rad,
+        };
+        Some(m.velocity_m_s)
+    }
+
     /// The cascade setpoint of each flying mode.
     fn guide(
         &self,
@@ -333,6 +362,7 @@ impl Autopilot {
         match mode {
             FlightMode::Takeoff | FlightMode::Hold => Some(CascadeSetpoint {
                 horizontal_m: Some(hold_xy),
+                feed_forward_m_s: None,
                 vertical: Vertical::Height(self.home.position_m[2]),
                 yaw_rad,
             }),
@@ -353,6 +383,7 @@ impl Autopilot {
                 let trusted = e.valid && failsafe != Some(FailsafeReason::LidarLost);
                 Some(CascadeSetpoint {
                     horizontal_m: trusted.then_some(hold_xy),
+                    feed_forward_m_s: None,
                     vertical: Vertical::ClimbRate(-rate),
                     yaw_rad,
                 })

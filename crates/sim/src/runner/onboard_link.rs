@@ -6,6 +6,7 @@
 //! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
 //! to. The runner never hands the stack ground truth; the log holds only onboard values.
 
+use crate::runner::mission::Mission;
 use crate::runner::{FlightSoftware, SensorFrame, SetupError, STATE_RATE_HZ};
 use crate::sensors::lidar::{LidarProfile, LidarScan};
 use crate::vehicle::{Frame, VehicleParams};
@@ -55,6 +56,8 @@ pub struct Script {
     pub radio: Vec<(f64, PilotInput)>,
     /// The lidar stops delivering revolutions from this time on.
     pub lidar_dies_at_s: Option<f64>,
+    /// Setpoints streamed to the stack while the mission lasts.
+    pub mission: Option<Mission>,
 }
 
 impl Script {
@@ -69,6 +72,7 @@ impl Script {
                 },
             )],
             lidar_dies_at_s: None,
+            mission: None,
         }
     }
 
@@ -225,6 +229,11 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             scan_match: None,
             battery: Some(frame.battery),
             pilot: self.script.radio_at(frame.t_s),
+            mission: self
+                .script
+                .mission
+                .as_ref()
+                .and_then(|m| m.setpoint(frame.t_s)),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         let mut log = self.log.borrow_mut();

@@ -3,7 +3,9 @@
 //! scores it.
 
 use super::score::{self, Judge, Score};
+use super::track::TrackShape;
 use crate::disturb::Push;
+use crate::runner::mission::Mission;
 use crate::runner::onboard_link::FlightLog;
 use crate::runner::plan::Plan;
 use crate::runner::{self, Outcome, Pilot, Recorder, SetupError, SimConfig};
@@ -63,6 +65,8 @@ pub struct Options {
     pub dynamic_rejection: bool,
     /// Run length, s: the scenario's default when `None`.
     pub duration_s: Option<f64>,
+    /// The path of the `track` scenario.
+    pub track: TrackShape,
 }
 
 impl Default for Options {
@@ -73,6 +77,7 @@ impl Default for Options {
             tuning: Tuning::default(),
             dynamic_rejection: true,
             duration_s: None,
+            track: TrackShape::default(),
         }
     }
 }
@@ -141,16 +146,18 @@ impl Flight {
     }
 
     /// Onboard software that logs into `log`, scored on holding over the start; `push` is the
-    /// scenario's own push, whose effect is scored apart.
+    /// scenario's own push, whose effect is scored apart; the `mission` it flies, if any, is
+    /// scored on tracking.
     pub fn onboard(
         pilot: Pilot,
         log: Rc<RefCell<FlightLog>>,
         push: Option<Push>,
+        mission: Option<Mission>,
         config: &SimConfig,
     ) -> Self {
         Self {
             pilot,
-            judge: Judge::Onboard { log, push },
+            judge: Judge::Onboard { log, push, mission },
             planned_s: config.max_duration_s,
         }
     }

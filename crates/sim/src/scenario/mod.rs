@@ -11,6 +11,8 @@
 //! - `land-on-low-battery` ([`low_battery`]): a nearly empty pack must bring the vehicle down.
 //! - `lidar-failure` ([`lidar_failure`]): the lidar stops; the vehicle holds on the IMU, then
 //!   lands.
+//! - `track` ([`track`]): the onboard stack flies a square or a figure of eight fed to it as
+//!   mission setpoints; scored on the tracking error.
 //!
 //! Adding a scenario is one new file and one catalogue entry: write `scenario/NAME.rs` with a
 //! `pub(super) const ENTRY: Entry` (its parts come from `super::flight`) whose `prepare`
@@ -27,16 +29,19 @@ pub mod low_battery;
 pub mod onboard;
 pub mod score;
 pub mod survey;
+pub mod track;
 
 pub use flight::{fly, Controller, Entry, Flight, Options, Report, ScenarioError, Tuning};
+pub use track::TrackShape;
 
 /// Every scenario, as named on the command line.
-pub static CATALOGUE: [Entry; 5] = [
+pub static CATALOGUE: [Entry; 6] = [
     survey::ENTRY,
     hold::ENTRY,
     hold::WITH_PEOPLE,
     low_battery::ENTRY,
     lidar_failure::ENTRY,
+    track::ENTRY,
 ];
 
 /// The scenario called `name`.

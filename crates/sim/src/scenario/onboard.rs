@@ -66,6 +66,7 @@ pub(super) fn flight(
             .validate()
             .map_err(|e| ScenarioError::Setup(SetupError::Config(e.to_string())))?;
     }
+    let mission = script.mission.clone();
     let (pilot, log) = if config.lidar.beams <= XV11_BEAMS {
         let (link, log) =
             OnboardLink::<XV11_BEAMS>::new(&config.lidar, odometry, autopilot, script)
@@ -77,5 +78,5 @@ pub(super) fn flight(
                 .map_err(ScenarioError::Setup)?;
         (Pilot::Onboard(Box::new(link)), log)
     };
-    Ok(Flight::onboard(pilot, log, push, config))
+    Ok(Flight::onboard(pilot, log, push, mission, config))
 }
