@@ -340,9 +340,13 @@ impl Cascade {
         let Some(mrac) = &mut self.mrac else {
             return Ok(None);
         };
-        let [x, y] = match setpoint.horizontal_m {
-            Some([x, y]) => [Command::Position(x), Command::Position(y)],
-            None => [Command::Off; 2],
+        let [x, y] = match (setpoint.horizontal_m, setpoint.feed_forward_m_s) {
+            (Some([x, y]), None) => [Command::Position(x), Command::Position(y)],
+            (Some(p), Some(v)) => core::array::from_fn(|k| Command::Track {
+                position_m: p[k],
+                velocity_m_s: v[k],
+            }),
+            (None, _) => [Command::Off; 2],
         };
         let z = match setpoint.vertical {
             Vertical::Height(h) => Command::Position(h),

@@ -184,6 +184,10 @@ impl<const C: usize> Mrac<C> {
         let finite = |v: f32| v.is_finite();
         let command_finite = commands.iter().all(|c| match c {
             Command::Position(v) | Command::Velocity(v) => v.is_finite(),
+            Command::Track {
+                position_m,
+                velocity_m_s,
+            } => position_m.is_finite() && velocity_m_s.is_finite(),
             Command::Off => true,
         });
         if !(state.position_m.iter().all(|v| finite(*v))
