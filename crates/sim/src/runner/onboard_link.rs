@@ -245,7 +245,8 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
         log.rejected_points = self.onboard.rejected_points();
         let autopilot = self.onboard.autopilot();
         log.saturation_s = autopilot.faults().saturated_s;
-        if let Some(mrac) = autopilot.mrac() {
+        // The norm after disarm is the forgotten one (zero): report the flight's.
+        if let Some(mrac) = autopilot.mrac().filter(|_| out.mode != FlightMode::Disarmed) {
             let norm = f64::from(mrac.weight_norm());
             log.adaptive_weight_norm = Some(norm);
             log.max_adaptive_weight_norm =
