@@ -111,8 +111,9 @@ impl Default for MracConfig {
                 enabled: true,
                 // Chosen on the simulator's square track in the hall (utm30lx, seeds 1-4,
                 // nominal vehicle): 10 and 5 flew every seed (RMS track error 0.23-0.33 m);
-                // one rate of 20 for all weights, or a bias rate of 20 or 40, hit a wall on
-                // one seed in three or four; 1 for all hit walls too (too slow to correct).
+                // one rate of 20 for all weights hit a wall on two seeds of three, a bias rate
+                // of 40 on one of three, of 20 on one of four; one rate of 1 for all on two of
+                // three.
                 // With kp = 6, kd = 4 a bias rate of 10 integrates about 1.5 x (velocity
                 // error + 0.57 x position error), 1.5 times the PID's vertical integral gain.
                 bias_learning_rate: 10.0,
