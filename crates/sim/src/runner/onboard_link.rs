@@ -246,7 +246,10 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
         let autopilot = self.onboard.autopilot();
         log.saturation_s = autopilot.faults().saturated_s;
         // The norm after disarm is the forgotten one (zero): report the flight's.
-        if let Some(mrac) = autopilot.mrac().filter(|_| out.mode != FlightMode::Disarmed) {
+        if let Some(mrac) = autopilot
+            .mrac()
+            .filter(|_| out.mode != FlightMode::Disarmed)
+        {
             let norm = f64::from(mrac.weight_norm());
             log.adaptive_weight_norm = Some(norm);
             log.max_adaptive_weight_norm =
