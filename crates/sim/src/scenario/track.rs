@@ -49,9 +49,10 @@ pub const TRACK_SPEED_MPS: f64 = 1.0;
 /// controller allows; a mission planner limits it the same way.
 pub const TRACK_ACCEL_MPS2: f64 = 1.0;
 pub const TRACK_LAPS: usize = 3;
-/// How long the stack holds at the start after the last lap when the options give no
-/// duration: enough for a hold error after the settling, s.
-const HOLD_AFTER_S: f64 = 12.0;
+/// How long the run goes on after the last lap would end if the mission started on time,
+/// when the options give no duration: room for a late start (a heavy vehicle's slow take-off)
+/// and a hold error after the settling, s.
+const HOLD_AFTER_S: f64 = 20.0;
 /// Room the path must leave around the vehicle, beyond its radius: tracking errors under model
 /// error reach a few decimetres, m.
 const TRACK_MARGIN_M: f64 = 0.5;
@@ -147,7 +148,10 @@ pub fn to_world(start: [f64; 3], p: [f64; 2]) -> [f64; 2] {
 }
 
 fn prepare(options: &Options, config: &mut SimConfig) -> Result<Flight, ScenarioError> {
+    // The world's people walk unless the caller left them out.
+    let people = config.people;
     onboard::setup(ENTRY.name, options, config)?;
+    config.people = people;
     // The path is flown at the height the stack holds after take-off.
     let height_m = autopilot_for(&config.vehicle).supervisor.takeoff_height_m;
     let mission = mission(options.track, f64::from(height_m));
