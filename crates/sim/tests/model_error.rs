@@ -156,8 +156,7 @@ fn dropping_a_payload_is_a_step_in_the_throttle_and_a_jump_in_height() {
 
 #[test]
 fn the_pid_stack_follows_the_square() {
-    // The UTM-30LX: at 1 m/s the XV-11's five revolutions a second leave the keyframe
-    // odometry too far behind on this path (it loses the lidar; see the track scenario).
+    // The UTM-30LX: at 1 m/s the XV-11's keyframe odometry loses the lidar on this path.
     let config = calm_hall(LidarProfile::utm30lx());
     let options = Options {
         track: TrackShape::Square,
@@ -166,8 +165,10 @@ fn the_pid_stack_follows_the_square() {
     };
     let (report, _, _) = fly("track", config, options);
     let track = report.score.track.expect("the square was flown");
+    // Seeds 1-4 measured 0.104-0.119 m RMS, 0.20-0.26 m at most: the velocity loop's lag
+    // where the setpoint speeds up and slows down.
     assert!(
-        track.rms_m < 0.4 && track.max_m < 1.0,
+        track.rms_m < 0.2 && track.max_m < 0.4,
         "tracking error rms {} m, max {} m",
         track.rms_m,
         track.max_m
