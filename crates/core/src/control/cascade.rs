@@ -190,6 +190,9 @@ pub struct Cascade {
     mrac: Option<Mrac<AUTOPILOT_CENTRES>>,
     /// Whether the vehicle was airborne at the last actuation: the MRAC learns only then.
     airborne: bool,
+    /// The collective the lift asked for at the estimated tilt before the collective bounds,
+    /// for the MRAC's hedge (what the bounds and the mixer then took away is hedged).
+    wanted_collective: f32,
     attitude: [Pid; 3],
     rate: [Pid; 3],
     /// The velocity loop's last output, held between runs of the outer loops; `None` makes
@@ -226,6 +229,7 @@ impl Cascade {
             ],
             mrac: None,
             airborne: false,
+            wanted_collective: 0.0,
             held: None,
             outer_elapsed_s: 0.0,
         }
@@ -249,7 +253,26 @@ impl Cascade {
     pub fn actuated(&mut self, achieved: &Demand, airborne: bool) {
         self.airborne = airborne;
         if let Some(m) = &mut self.mrac {
-            m.actuated(achieved.collective);
+            m.actuated(self.wanted_collective, achieved.collective);
+        }
+    }
+
+    /// Tells the MRAC what its pseudo-control became through the inversion: the model's
+    /// acceleration for the commanded tilt and lift, so the tilt limit and the lift floor are
+    /// hedged.
+    fn note_inversion(&mut self, target: &AttitudeTarget, state: &EstimatedState) {
+        let hover = self.config.hover_collective;
+        if let Some(m) = &mut self.mrac {
+            let (roll, pitch) = (target.roll_rad, target.pitch_rad);
+            let collective =
+                inversion::collective_for(target.lift_m_s2, roll, pitch, hover, 0.0, f32::INFINITY);
+            m.inverted(inversion::acceleration_of(
+                roll,
+                pitch,
+                state.yaw_rad,
+                collective,
+                hover,
+            ));
         }
     }
 
@@ -304,7 +327,11 @@ impl Cascade {
             }
             _ => {
                 let target = match self.adaptive_acceleration(setpoint, state, elapsed)? {
-                    Some(accel) => self.invert(accel, setpoint.yaw_rad, state),
+                    Some(accel) => {
+                        let target = self.invert(accel, setpoint.yaw_rad, state);
+                        self.note_inversion(&target, state);
+                        target
+                    }
                     None => {
                         let velocity_sp = self.velocity_setpoint(setpoint, state, elapsed)?;
                         self.attitude_target(
@@ -323,6 +350,17 @@ impl Cascade {
         };
         target.yaw_rad = setpoint.yaw_rad;
         target.collective = self.collective(target.lift_m_s2, state);
+        if self.mrac.is_some() {
+            let c = &self.config;
+            self.wanted_collective = inversion::collective_for(
+                target.lift_m_s2,
+                state.roll_rad,
+                state.pitch_rad,
+                c.hover_collective,
+                0.0,
+                f32::INFINITY,
+            );
+        }
         let rate_sp = self.rate_setpoint(&target, state, dt)?;
         self.demand(&target, rate_sp, gyro_rad_s, dt, integrate)
     }
@@ -335,20 +373,23 @@ impl Cascade {
         state: &EstimatedState,
         dt: f32,
     ) -> Result<Option<[f32; 3]>, PidError> {
-        let hover = self.config.hover_collective;
         let airborne = self.airborne;
         let Some(mrac) = &mut self.mrac else {
             return Ok(None);
         };
-        let [x, y] = match setpoint.horizontal_m {
-            Some([x, y]) => [Command::Position(x), Command::Position(y)],
-            None => [Command::Off; 2],
+        let [x, y] = match (setpoint.horizontal_m, setpoint.feed_forward_m_s) {
+            (Some([x, y]), None) => [Command::Position(x), Command::Position(y)],
+            (Some(p), Some(v)) => core::array::from_fn(|k| Command::Track {
+                position_m: p[k],
+                velocity_m_s: v[k],
+            }),
+            (None, _) => [Command::Off; 2],
         };
         let z = match setpoint.vertical {
             Vertical::Height(h) => Command::Position(h),
             Vertical::ClimbRate(rate) => Command::Velocity(rate),
         };
-        mrac.step([x, y, z], state, hover, dt, airborne)
+        mrac.step([x, y, z], state, dt, airborne)
             .map_err(|e| match e {
                 MracError::NonFinite => PidError::NonFinite,
                 MracError::BadDt => PidError::BadDt,

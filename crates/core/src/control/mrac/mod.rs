@@ -6,7 +6,7 @@
 //! collective, and the attitude and rate loops fly that exactly as they do for the PID.
 //!
 //! Per world axis (x, y, z), each outer step:
-//! 1. hedge ([`hedge`]): what the vehicle failed to deliver of the last command;
+//! 1. hedge ([`hedge`]): what the inversion's limits and the motors cut from the last command;
 //! 2. reference model ([`reference`], eq. 8): `x_rm` moves on over the step just flown at that
 //!    step's `nu_crm - nu_h`, then gives this step's `nu_crm = f_rm(x_rm, r)`;
 //! 3. tracking error `e = x_rm - x` (position and velocity), PD `nu_pd = kp e_p + kd e_v`;
@@ -65,8 +65,10 @@ pub struct Mrac<const C: usize> {
     /// The reference model's own acceleration at the last step (m/s^2): the model moves on
     /// by it, less the hedge, once that step's outcome is known.
     last_model_accel: [f32; 3],
-    /// The collective the mixer last delivered.
-    achieved_collective: Option<f32>,
+    /// What the inversion made of the last command (m/s^2, see [`hedge`]).
+    deliverable: Option<[f32; 3]>,
+    /// Delivered over wanted collective at the last actuation.
+    thrust_ratio: f32,
     hedge: [f32; 3],
     monitor: Monitor,
     /// False once the watchdog has switched the adaptive element off.
@@ -100,7 +102,8 @@ impl<const C: usize> Mrac<C> {
             ],
             last_command: None,
             last_model_accel: [0.0; 3],
-            achieved_collective: None,
+            deliverable: None,
+            thrust_ratio: 1.0,
             hedge: [0.0; 3],
             monitor: Monitor::default(),
             adaptive_on: config.adaptive.enabled,
@@ -116,7 +119,8 @@ impl<const C: usize> Mrac<C> {
         self.started = false;
         self.last_command = None;
         self.last_model_accel = [0.0; 3];
-        self.achieved_collective = None;
+        self.deliverable = None;
+        self.thrust_ratio = 1.0;
         self.hedge = [0.0; 3];
         self.monitor.reset();
     }
@@ -131,9 +135,20 @@ impl<const C: usize> Mrac<C> {
         self.unreported = None;
     }
 
-    /// What the mixer delivered of the last demand: its collective feeds the next hedge.
-    pub fn actuated(&mut self, achieved_collective: f32) {
-        self.achieved_collective = Some(achieved_collective);
+    /// What the inversion made of the last pseudo-control: the model's acceleration for the
+    /// tilt and lift it commanded (m/s^2). Feeds the next hedge.
+    pub fn inverted(&mut self, deliverable_m_s2: [f32; 3]) {
+        self.deliverable = Some(deliverable_m_s2);
+    }
+
+    /// The collective the inner loop wanted and what the collective bounds and the mixer
+    /// delivered of it. Feeds the next hedge.
+    pub fn actuated(&mut self, wanted_collective: f32, achieved_collective: f32) {
+        self.thrust_ratio = if wanted_collective > 0.0 && achieved_collective.is_finite() {
+            achieved_collective / wanted_collective
+        } else {
+            1.0
+        };
     }
 
     /// Norm of all adaptive weights (m/s^2 per unit basis).
@@ -167,14 +182,12 @@ impl<const C: usize> Mrac<C> {
     }
 
     /// One outer step: commands per world axis and the estimate in, the pseudo-control (world
-    /// acceleration, m/s^2, z up, gravity not included) out. `hover_collective` is the
-    /// inversion's, for the hedge. `adapt` false freezes the weights (on the ground, where the
+    /// acceleration, m/s^2, z up, gravity not included) out. `adapt` false freezes the weights (on the ground, where the
     /// ground and not the controller holds the vehicle).
     pub fn step(
         &mut self,
         commands: [Command; 3],
         state: &EstimatedState,
-        hover_collective: f32,
         dt: f32,
         adapt: bool,
     ) -> Result<[f32; 3], MracError> {
@@ -184,6 +197,10 @@ impl<const C: usize> Mrac<C> {
         let finite = |v: f32| v.is_finite();
         let command_finite = commands.iter().all(|c| match c {
             Command::Position(v) | Command::Velocity(v) => v.is_finite(),
+            Command::Track {
+                position_m,
+                velocity_m_s,
+            } => position_m.is_finite() && velocity_m_s.is_finite(),
             Command::Off => true,
         });
         if !(state.position_m.iter().all(|v| finite(*v))
@@ -207,8 +224,8 @@ impl<const C: usize> Mrac<C> {
         let on = commands.map(|c| c != Command::Off);
 
         // 1. Hedge: what the last command did not deliver.
-        self.hedge = match (self.last_command, self.achieved_collective) {
-            (Some(nu), Some(c)) => hedge::hedge(nu, state, c, hover_collective),
+        self.hedge = match (self.last_command, self.deliverable) {
+            (Some(nu), Some(d)) => hedge::hedge(nu, d, self.thrust_ratio),
             _ => [0.0; 3],
         };
 

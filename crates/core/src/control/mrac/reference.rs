@@ -8,6 +8,9 @@ use super::config::ReferenceConfig;
 pub enum Command {
     /// Go to and hold this position (m).
     Position(f32),
+    /// Follow a moving position (m) that moves at this velocity (m/s): the velocity is fed
+    /// forward so the model keeps up without lagging.
+    Track { position_m: f32, velocity_m_s: f32 },
     /// Fly this velocity (m/s); landing descends at a rate, not to a height.
     Velocity(f32),
     /// No control on this channel: level flight when the horizontal estimate is not trusted.
@@ -26,12 +29,17 @@ impl ReferenceChannel {
     /// a velocity target from the position error, bounded, then an acceleration from the
     /// velocity error, bounded. Zero for [`Command::Off`].
     pub fn acceleration(&self, c: &ReferenceConfig, command: Command) -> f32 {
+        let bounded = |v: f32| v.clamp(-c.max_speed_m_s, c.max_speed_m_s);
         let target_m_s = match command {
-            Command::Position(r) => c.position_gain_per_s * (r - self.position_m),
-            Command::Velocity(v) => v,
+            Command::Position(r) => bounded(c.position_gain_per_s * (r - self.position_m)),
+            // As the PID's position loop does: the bounded correction plus the feed-forward.
+            Command::Track {
+                position_m,
+                velocity_m_s,
+            } => bounded(c.position_gain_per_s * (position_m - self.position_m)) + velocity_m_s,
+            Command::Velocity(v) => bounded(v),
             Command::Off => return 0.0,
         };
-        let target_m_s = target_m_s.clamp(-c.max_speed_m_s, c.max_speed_m_s);
         (c.velocity_gain_per_s * (target_m_s - self.velocity_m_s))
             .clamp(-c.max_accel_m_s2, c.max_accel_m_s2)
     }
@@ -101,6 +109,21 @@ mod tests {
         }
         assert!((m.velocity_m_s + 0.5).abs() < 1e-3, "{m:?}");
         assert_eq!(m.acceleration(&c, Command::Off), 0.0);
+        // A point moving at 0.8 m/s is followed without lag once the model has caught up.
+        let mut m = ReferenceChannel::default();
+        let mut r = 0.0;
+        for _ in 0..5000 {
+            let a = m.acceleration(
+                &c,
+                Command::Track {
+                    position_m: r,
+                    velocity_m_s: 0.8,
+                },
+            );
+            m.advance(a, 0.001);
+            r += 0.8 * 0.001;
+        }
+        assert!((m.position_m - r).abs() < 2e-3, "{m:?} {r}");
     }
 
     #[test]

@@ -29,11 +29,13 @@ impl Vertical {
     /// controller (no pseudo-control hedging). Returns the pseudo-control.
     fn step<const C: usize>(&mut self, mrac: &mut Mrac<C>, height_m: f32, hedged: bool) -> f32 {
         let commands = [Command::Off, Command::Off, Command::Position(height_m)];
-        let nu = mrac.step(commands, &self.state, HOVER, DT, true).unwrap();
+        let nu = mrac.step(commands, &self.state, DT, true).unwrap();
         let wanted = HOVER * (GRAVITY_M_S2 + nu[2]) / GRAVITY_M_S2;
         let achieved = wanted.clamp(0.0, self.max_collective);
         if hedged {
-            mrac.actuated(achieved);
+            // No tilt and no lift floor here: the inversion delivers the command.
+            mrac.inverted(nu);
+            mrac.actuated(wanted, achieved);
         }
         let accel = GRAVITY_M_S2 * achieved / HOVER - GRAVITY_M_S2 + self.delta_m_s2;
         self.state.velocity_m_s[2] += accel * DT;
@@ -231,14 +233,14 @@ fn bad_inputs_are_refused_without_changing_state() {
     };
     let cmd = [Command::Position(0.0); 3];
     assert_eq!(
-        m.step(cmd, &nan, HOVER, DT, true),
+        m.step(cmd, &nan, DT, true),
         Err(MracError::NonFinite)
     );
     let ok = EstimatedState::default();
-    assert_eq!(m.step(cmd, &ok, HOVER, 0.0, true), Err(MracError::BadDt));
+    assert_eq!(m.step(cmd, &ok, 0.0, true), Err(MracError::BadDt));
     let bad_cmd = [Command::Off, Command::Off, Command::Velocity(f32::INFINITY)];
     assert_eq!(
-        m.step(bad_cmd, &ok, HOVER, DT, true),
+        m.step(bad_cmd, &ok, DT, true),
         Err(MracError::NonFinite)
     );
     assert_eq!(m, before);
