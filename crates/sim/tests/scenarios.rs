@@ -1,4 +1,5 @@
-//! The scenario catalogue as a library: every entry prepares and flies on the shipped room with
+//! The scenario catalogue as a library: every entry prepares and flies on the shipped room (the
+//! track on the hall) with
 //! plain options, is scored, and refuses the controllers it cannot be flown with.
 
 use plumbline_sim::runner::{Discard, SimConfig};
@@ -6,12 +7,16 @@ use plumbline_sim::scenario::{self, Controller, Options, ScenarioError, CATALOGU
 use plumbline_sim::sensors::lidar::LidarProfile;
 use plumbline_sim::world::World;
 
-fn room() -> SimConfig {
+fn shipped(world: &str) -> SimConfig {
     SimConfig::new(
-        World::shipped("room").unwrap().unwrap(),
+        World::shipped(world).unwrap().unwrap(),
         LidarProfile::xv11(),
         3,
     )
+}
+
+fn room() -> SimConfig {
+    shipped("room")
 }
 
 #[test]
@@ -22,7 +27,12 @@ fn every_scenario_flies_a_short_run_and_is_scored() {
     assert_eq!(names.len(), CATALOGUE.len(), "names are unique");
     for entry in &CATALOGUE {
         assert!(std::ptr::eq(scenario::find(entry.name).unwrap(), entry));
-        let mut config = room();
+        // The track's 3 m square needs the open hall.
+        let mut config = shipped(if entry.name == "track" {
+            "hall"
+        } else {
+            "room"
+        });
         let options = Options {
             duration_s: Some(6.0),
             ..Options::default()

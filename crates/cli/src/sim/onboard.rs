@@ -120,6 +120,7 @@ pub fn extend_summary(
         "recovery_s": score.recovery_s,
         "motor_jitter": log.motor_jitter(),
         "saturation_s": log.saturation_s,
+        "mission_delay_s": log.mission_shift_s,
         "adaptive_weight_norm": log.adaptive_weight_norm,
         "max_adaptive_weight_norm": log.max_adaptive_weight_norm,
         "adaptive_fallback": log.adaptive_fallback.map(|(t_s, reason)| {

@@ -2,8 +2,16 @@
 //! ground station or companion computer feeds an autopilot (MAVLink
 //! SET_POSITION_TARGET_LOCAL_NED). The path is piecewise linear in time through its points, so
 //! a square's corners are exact and a curve is as fine as its sampling.
+//!
+//! Like a ground station, the sender waits for the vehicle to hold before it starts: the path
+//! begins at its own start time or [`SETTLE_BEFORE_START_S`] after the stack first reports
+//! Hold, whichever is later, and is shifted in time by the difference ([`Mission::shift_for`]).
+//! A vehicle slow to take off (a heavier one) then flies the same path, later.
 
 use plumbline_core::msgs::MissionSetpoint;
+
+/// Hold this long before a mission starts, s.
+pub const SETTLE_BEFORE_START_S: f64 = 3.0;
 
 /// Timed points in the estimate frame (origin and heading where the stack powered up).
 #[derive(Clone, Debug, PartialEq)]
@@ -50,6 +58,11 @@ impl Mission {
         let position = [a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1])];
         let velocity = [(b[0] - a[0]) / span, (b[1] - a[1]) / span];
         Some((position, velocity))
+    }
+
+    /// How much later than planned the path starts when the stack first held at `hold_s`, s.
+    pub fn shift_for(&self, hold_s: f64) -> f64 {
+        (hold_s + SETTLE_BEFORE_START_S - self.start_s()).max(0.0)
     }
 
     /// The setpoint the stack is sent at `t_s` (heading kept at the power-up heading).

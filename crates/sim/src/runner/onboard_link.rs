@@ -109,6 +109,9 @@ pub struct FlightLog {
     pub rejected_points: u64,
     /// Time the mixer had to cut the controller's request to fit the motors, s.
     pub saturation_s: f64,
+    /// How much later than planned the script's mission started (it waits for Hold), s;
+    /// `None` when the stack never held, so the mission never started.
+    pub mission_shift_s: Option<f64>,
     /// The MRAC's adaptive weight norm at the end and at its largest (`None` with the PID).
     pub adaptive_weight_norm: Option<f64>,
     pub max_adaptive_weight_norm: Option<f64>,
@@ -156,6 +159,8 @@ pub struct OnboardLink<const N: usize> {
     /// The revolution being handed over, in the onboard format.
     scan: Box<Scan<N>>,
     next_sample_s: f64,
+    /// Set when the stack first holds: how much later than planned the mission flies.
+    mission_shift_s: Option<f64>,
     log: Rc<RefCell<FlightLog>>,
 }
 
@@ -181,6 +186,7 @@ impl<const N: usize> OnboardLink<N> {
             last_imu: ImuSample::default(),
             scan: Box::new(Scan::new(0.0)),
             next_sample_s: 0.0,
+            mission_shift_s: None,
             log: log.clone(),
         };
         Ok((link, log))
@@ -229,14 +235,19 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             scan_match: None,
             battery: Some(frame.battery),
             pilot: self.script.radio_at(frame.t_s),
-            mission: self
-                .script
-                .mission
-                .as_ref()
-                .and_then(|m| m.setpoint(frame.t_s)),
+            mission: self.mission_shift_s.and_then(|shift| {
+                let m = self.script.mission.as_ref()?;
+                m.setpoint(frame.t_s - shift)
+            }),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
+        if let (None, Some(m), FlightMode::Hold) =
+            (self.mission_shift_s, &self.script.mission, out.mode)
+        {
+            self.mission_shift_s = Some(m.shift_for(frame.t_s));
+        }
         let mut log = self.log.borrow_mut();
+        log.mission_shift_s = self.mission_shift_s;
         if log.modes.last().is_none_or(|(_, m)| *m != out.mode) {
             log.modes.push((frame.t_s, out.mode));
         }

@@ -208,11 +208,16 @@ fn recovering(config: &SimConfig, t: f64) -> bool {
 }
 
 /// The tracking error of the true `states` from `mission`'s setpoints (estimate frame, which
-/// starts at the take-off pose) while it lasted.
-fn track_error(mission: &Mission, config: &SimConfig, states: &[StateSample]) -> Option<HoldError> {
+/// starts at the take-off pose) while it lasted, `shift_s` later than planned.
+fn track_error(
+    mission: &Mission,
+    shift_s: f64,
+    config: &SimConfig,
+    states: &[StateSample],
+) -> Option<HoldError> {
     let mut tally = ErrorTally::default();
     for s in states {
-        if let Some((p, _)) = mission.at(s.t_s) {
+        if let Some((p, _)) = mission.at(s.t_s - shift_s) {
             tally.add(horizontal_error(
                 s.position,
                 to_world(config.world.start, p),
@@ -235,9 +240,12 @@ fn score_onboard(
     let start = [config.world.start[0], config.world.start[1]];
     let end_s = states.last().map_or(0.0, |s| s.t_s);
     let windows = hold_windows(log, end_s);
-    // A mission's path and its settling are tracking, not station keeping.
-    let flying_mission =
-        |t: f64| mission.is_some_and(|m| t >= m.start_s() && t < m.end_s() + SETTLE_S);
+    // A mission's path (as late as it started) and its settling are tracking, not station
+    // keeping.
+    let shift = log.mission_shift_s.unwrap_or(0.0);
+    let flying_mission = |t: f64| {
+        mission.is_some_and(|m| t >= m.start_s() + shift && t < m.end_s() + shift + SETTLE_S)
+    };
     let holding = |t: f64| {
         windows.iter().any(|w| t >= w.0 && t < w.1) && !recovering(config, t) && !flying_mission(t)
     };
@@ -268,7 +276,9 @@ fn score_onboard(
     Score {
         hold,
         estimate_drift_m: drift,
-        track: mission.and_then(|m| track_error(m, config, states)),
+        track: mission
+            .zip(log.mission_shift_s)
+            .and_then(|(m, shift)| track_error(m, shift, config, states)),
         onboard: Some(OnboardScore {
             push_max_error_m,
             recovery_s,
