@@ -178,7 +178,7 @@ fn hedging_keeps_motor_saturation_out_of_the_learning_signal() {
         "{hedged_error} {hedged_norm}"
     );
     // Unhedged: the model runs ahead and the element learns the saturation as model error.
-    assert!(raw_error > 0.1 && raw_norm > 0.1, "{raw_error} {raw_norm}");
+    assert!(raw_error > 0.1 && raw_norm > 0.03, "{raw_error} {raw_norm}");
 }
 
 #[test]
