@@ -239,6 +239,7 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
                 let m = self.script.mission.as_ref()?;
                 m.setpoint(frame.t_s - shift)
             }),
+            companion: Default::default(),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         if let (None, Some(m), FlightMode::Hold) =
