@@ -101,6 +101,7 @@ fn fly(vehicle: &mut Vehicle) -> Report {
                 arm: t_s > 0.5,
                 ..PilotInput::default()
             },
+            mission: None,
             companion: Default::default(),
         });
         let outputs = vehicle.onboard.step(&inputs, scan.as_ref(), DT_S);

@@ -159,6 +159,17 @@ pub struct PositionSetpoint {
     pub yaw_rad: f32,
 }
 
+/// A setpoint from a mission (MAVLink SET_POSITION_TARGET_LOCAL_NED: position, velocity,
+/// yaw), in the estimate frame. A sequence of them flies a path: each moves the hold point,
+/// and its velocity is fed forward so the vehicle keeps up with it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MissionSetpoint {
+    pub position_m: [f32; 3],
+    /// How fast the setpoint moves horizontally (m/s).
+    pub velocity_m_s: [f32; 2],
+    pub yaw_rad: f32,
+}
+
 /// The onboard estimate, in the world frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct EstimatedState {
@@ -225,6 +236,8 @@ pub struct Inputs {
     /// A new battery reading, if one arrived since the last step.
     pub battery: Option<BatterySample>,
     pub pilot: PilotInput,
+    /// This step's mission setpoint, if a mission is flying; followed in Hold only.
+    pub mission: Option<MissionSetpoint>,
     /// What the companion computer sent since the last step (all `None` without one).
     pub companion: CompanionMessages,
 }

@@ -42,6 +42,7 @@ fn fly(config: &SimConfig, arm: &[(f64, bool)], lidar_dies_at_s: Option<f64>) ->
             })
             .collect(),
         lidar_dies_at_s,
+        mission: None,
     };
     let (link, log) = OnboardLink::<XV11_BEAMS>::new(
         &config.lidar,

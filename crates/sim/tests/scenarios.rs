@@ -1,4 +1,5 @@
-//! The scenario catalogue as a library: every entry prepares and flies on the shipped room with
+//! The scenario catalogue as a library: every entry prepares and flies on the shipped room (the
+//! track on the hall) with
 //! plain options, is scored, and refuses the controllers it cannot be flown with.
 
 use plumbline_sim::runner::{Discard, SimConfig};
@@ -6,12 +7,16 @@ use plumbline_sim::scenario::{self, Controller, Options, ScenarioError, CATALOGU
 use plumbline_sim::sensors::lidar::LidarProfile;
 use plumbline_sim::world::World;
 
-fn room() -> SimConfig {
+fn shipped(world: &str) -> SimConfig {
     SimConfig::new(
-        World::shipped("room").unwrap().unwrap(),
+        World::shipped(world).unwrap().unwrap(),
         LidarProfile::xv11(),
         3,
     )
+}
+
+fn room() -> SimConfig {
+    shipped("room")
 }
 
 #[test]
@@ -22,7 +27,12 @@ fn every_scenario_flies_a_short_run_and_is_scored() {
     assert_eq!(names.len(), CATALOGUE.len(), "names are unique");
     for entry in &CATALOGUE {
         assert!(std::ptr::eq(scenario::find(entry.name).unwrap(), entry));
-        let mut config = room();
+        // The track's 3 m square needs the open hall.
+        let mut config = shipped(if entry.name == "track" {
+            "hall"
+        } else {
+            "room"
+        });
         let options = Options {
             duration_s: Some(6.0),
             ..Options::default()
@@ -59,18 +69,25 @@ fn controllers_a_scenario_cannot_fly_are_refused_with_the_one_that_can() {
         }
     };
     assert_eq!(refused("survey", Controller::Pid), None);
-    assert_eq!(refused("hold", Controller::Mrac), Some(Controller::Pid));
+    assert_eq!(refused("survey", Controller::Mrac), None);
     assert_eq!(
         refused("lidar-failure", Controller::TestPilot),
         Some(Controller::Pid)
     );
-    // The test pilot may hover for sensor logs.
-    let options = Options {
-        controller: Some(Controller::TestPilot),
-        ..Options::default()
-    };
-    assert!(scenario::find("hold")
-        .unwrap()
-        .prepare(&options, &mut room())
-        .is_ok());
+    // The test pilot may hover for sensor logs; both onboard controllers fly every onboard
+    // scenario.
+    for (name, controller) in [
+        ("hold", Controller::TestPilot),
+        ("hold", Controller::Mrac),
+        ("hold-people", Controller::Mrac),
+        ("land-on-low-battery", Controller::Mrac),
+        ("lidar-failure", Controller::Mrac),
+    ] {
+        let options = Options {
+            controller: Some(controller),
+            ..Options::default()
+        };
+        let prepared = scenario::find(name).unwrap().prepare(&options, &mut room());
+        assert!(prepared.is_ok(), "{name} {controller:?}");
+    }
 }

@@ -143,6 +143,7 @@ fn manual_flight(c: &SimConfig, stick: PilotInput, stick_s: f64) -> Script {
             (3.0 + stick_s, radio(hover)),
         ],
         lidar_dies_at_s: None,
+        mission: None,
     }
 }
 
@@ -249,6 +250,7 @@ fn the_kill_switch_stops_the_motors_at_the_next_step_and_the_vehicle_falls() {
         Script {
             radio,
             lidar_dies_at_s: None,
+            mission: None,
         },
     );
     let held = f.at(KILL_S - 0.01).position.z;
@@ -297,6 +299,7 @@ fn takeover(pitch_norm: f32) -> (SimConfig, Flown) {
         Script {
             radio,
             lidar_dies_at_s: None,
+            mission: None,
         },
     );
     (c, f)

@@ -3,6 +3,7 @@
 //! `plumbline-sim`'s; this command parses, writes files, plots and prints.
 
 mod explore;
+mod model_error;
 mod onboard;
 mod outputs;
 mod plot;
@@ -30,7 +31,7 @@ use std::time::Instant;
 
 #[derive(Args, Debug)]
 pub struct SimArgs {
-    /// A shipped world (room, office, building, intel), a world file (crates/sim/WORLDS.md)
+    /// A shipped world (room, office, building, intel, hall), a world file (crates/sim/WORLDS.md)
     /// or an occupancy image (map.pgm with map.yaml beside it).
     #[arg(long, default_value = "office")]
     pub world: String,
@@ -39,6 +40,8 @@ pub struct SimArgs {
     pub scenario: String,
     #[command(flatten)]
     pub closed_loop: onboard::ClosedLoopArgs,
+    #[command(flatten)]
+    pub model_error: model_error::ModelErrorArgs,
     #[arg(long, default_value = "xv11", value_parser = ["xv11", "urg04lx", "utm30lx"])]
     pub lidar: String,
     /// Vehicle preset (f450, pelican) or a TOML file (`base = "..."` plus overrides).
@@ -118,7 +121,7 @@ pub fn load_world(arg: &str) -> Result<World, CliError> {
     }
     let text = read_text(Path::new(arg)).map_err(|e| {
         CliError(format!(
-            "{e} (shipped worlds: room, office, building, intel)"
+            "{e} (shipped worlds: room, office, building, intel, hall)"
         ))
     })?;
     World::parse(&text).map_err(|e| CliError(format!("{arg}: {e}")))
@@ -187,6 +190,8 @@ fn summary(args: &SimArgs, config: &SimConfig, report: &Report, wall_s: f64) -> 
         "distance_flown_m": out.distance_flown_m,
         "rms_hold_error_m": score.hold.map(|h| h.rms_m),
         "max_hold_error_m": score.hold.map(|h| h.max_m),
+        "rms_track_error_m": score.track.map(|h| h.rms_m),
+        "max_track_error_m": score.track.map(|h| h.max_m),
         "estimate_drift_m": score.estimate_drift_m,
         "min_clearance_m": out.min_clearance_m,
         "energy_wh": out.energy.total_wh(),
@@ -196,6 +201,7 @@ fn summary(args: &SimArgs, config: &SimConfig, report: &Report, wall_s: f64) -> 
         "battery_min_v": out.battery_min_v,
         "battery_end_soc": out.battery_end_soc,
         "battery_low_s": out.battery_low_at_s,
+        "model_error": args.model_error.summary(config),
     })
 }
 
@@ -272,6 +278,7 @@ pub fn run(args: SimArgs) -> CliResult {
     if args.no_gusts {
         config.gusts = None;
     }
+    args.model_error.apply(&mut config);
     if let Some(d) = args.duration {
         if !(d.is_finite() && d > 0.0) {
             return Err(CliError(format!("--duration must be positive, got {d}")));

@@ -7,12 +7,13 @@ use crate::plot::write_png;
 use crate::report::CliError;
 use clap::Args;
 use plotters::prelude::*;
+use plumbline_core::control::mrac::FallbackReason;
 use plumbline_core::msgs::{FailsafeReason, FlightMode};
 use plumbline_sim::runner::companion::Strategy;
 use plumbline_sim::runner::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
 use plumbline_sim::scenario::score::OnboardScore;
-use plumbline_sim::scenario::{Controller, Options, Tuning};
+use plumbline_sim::scenario::{Controller, Options, TrackShape, Tuning};
 use serde_json::{json, Value};
 use std::path::Path;
 
@@ -20,7 +21,8 @@ use std::path::Path;
 #[derive(Args, Debug)]
 pub struct ClosedLoopArgs {
     /// Who flies: `pid` (the onboard cascade; default for the closed-loop scenarios), `mrac`
-    /// (not implemented yet) or `test-pilot` (the simulator's ground-truth pilot: `survey`,
+    /// (the same cascade with model-reference adaptive control in place of its position and
+    /// velocity loops) or `test-pilot` (the simulator's ground-truth pilot: `survey`,
     /// and `hold` as a sensor-log generator).
     #[arg(long, value_parser = ["pid", "mrac", "test-pilot"])]
     pub controller: Option<String>,
@@ -37,6 +39,10 @@ pub struct ClosedLoopArgs {
     /// rules alone).
     #[arg(long, default_value = "frontier", value_parser = ["frontier", "wall-follow"])]
     pub guidance: String,
+    /// The path of `--scenario track`: a 3 m x 3 m `square` with a corner at the start, or a
+    /// figure of `eight` in a 3 m x 3 m box centred on the start.
+    #[arg(long, default_value = "square", value_parser = ["square", "eight"])]
+    pub track: String,
 }
 
 impl ClosedLoopArgs {
@@ -55,12 +61,17 @@ impl ClosedLoopArgs {
             "wall-follow" => Strategy::WallFollow,
             _ => Strategy::Frontier,
         };
+        let track = match self.track.as_str() {
+            "eight" => TrackShape::Eight,
+            _ => TrackShape::Square,
+        };
         Options {
             controller,
             tuning,
             dynamic_rejection: !self.no_rejection,
             duration_s,
             strategy,
+            track,
         }
     }
 }
@@ -73,6 +84,15 @@ fn failsafe_name(r: FailsafeReason) -> &'static str {
         FailsafeReason::BatteryCritical => "battery_critical",
         FailsafeReason::KillSwitch => "kill_switch",
         FailsafeReason::CompanionLost => "companion_lost",
+    }
+}
+
+fn fallback_name(r: FallbackReason) -> &'static str {
+    match r {
+        FallbackReason::NonFinite => "non_finite",
+        FallbackReason::WeightBound => "weight_bound",
+        FallbackReason::PersistentHedge => "persistent_hedge",
+        FallbackReason::InvalidConfig => "invalid_config",
     }
 }
 
@@ -106,12 +126,20 @@ pub fn extend_summary(
     let extra = json!({
         "controller": args.controller.as_deref().unwrap_or("pid"),
         "tuning": args.tuning,
+        "track": (summary["scenario"] == "track").then_some(args.track.as_str()),
         "dynamic_rejection": !args.no_rejection,
         "people": config.people,
         "landed": score.landed,
         "push_max_error_m": score.push_max_error_m,
         "recovery_s": score.recovery_s,
         "motor_jitter": log.motor_jitter(),
+        "saturation_s": log.saturation_s,
+        "mission_delay_s": log.mission_shift_s,
+        "adaptive_weight_norm": log.adaptive_weight_norm,
+        "max_adaptive_weight_norm": log.max_adaptive_weight_norm,
+        "adaptive_fallback": log.adaptive_fallback.map(|(t_s, reason)| {
+            json!({ "t_s": t_s, "reason": fallback_name(reason) })
+        }),
         "failsafe": log.failsafe.map(failsafe_name),
         "rejected_points": log.rejected_points,
         "modes": modes,

@@ -9,11 +9,14 @@
 //! integral; the collective comes from the vertical loops and is tilt-compensated.
 //! Attitude errors are taken on Euler angles, which is adequate within the tilt limit.
 
+use super::inversion;
 use super::mixer::Demand;
+use super::mrac::{
+    Command, FallbackReason, Mrac, MracConfig, MracConfigError, MracError, AUTOPILOT_CENTRES,
+};
 use super::pid::{Pid, PidConfig, PidError};
 use crate::geom::normalize_angle;
-use crate::msgs::{EstimatedState, GRAVITY_M_S2};
-use libm::{atanf, cosf, sqrtf};
+use crate::msgs::EstimatedState;
 
 /// Gains and limits of the whole cascade. Defaults suit the simulator's "pelican" vehicle (1 kg,
 /// 0.21 m arms, 7 N rotors); for another vehicle set `effectiveness_rad_s2` and
@@ -148,6 +151,10 @@ pub struct CascadeSetpoint {
     /// World (x, y) to hold (m); `None` flies level with no horizontal loops, for when the
     /// horizontal estimate cannot be trusted (estimate-invalid landing).
     pub horizontal_m: Option<[f32; 2]>,
+    /// How fast the horizontal setpoint moves, world frame (m/s): added to the position loop's
+    /// output, so a moving setpoint is followed without the lag a position error would need
+    /// to ask for that speed. `None` for a fixed setpoint.
+    pub feed_forward_m_s: Option<[f32; 2]>,
     pub vertical: Vertical,
     pub yaw_rad: f32,
 }
@@ -172,12 +179,20 @@ pub struct AttitudeTarget {
     pub lift_m_s2: f32,
 }
 
-/// The state of all twelve loops.
+/// The state of all twelve loops, and of the MRAC when it flies the outer loops instead.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cascade {
     pub config: CascadeConfig,
     position: [Pid; 3],
     velocity: [Pid; 3],
+    /// When set, the MRAC replaces the position and velocity PIDs; the inversion, attitude
+    /// and rate loops are the same for both.
+    mrac: Option<Mrac<AUTOPILOT_CENTRES>>,
+    /// Whether the vehicle was airborne at the last actuation: the MRAC learns only then.
+    airborne: bool,
+    /// The collective the lift asked for at the estimated tilt before the collective bounds,
+    /// for the MRAC's hedge (what the bounds and the mixer then took away is hedged).
+    wanted_collective: f32,
     attitude: [Pid; 3],
     rate: [Pid; 3],
     /// The velocity loop's last output, held between runs of the outer loops; `None` makes
@@ -212,8 +227,64 @@ impl Cascade {
                 Pid::new(c.rate_rp),
                 Pid::new(c.rate_yaw),
             ],
+            mrac: None,
+            airborne: false,
+            wanted_collective: 0.0,
             held: None,
             outer_elapsed_s: 0.0,
+        }
+    }
+
+    /// The cascade with the MRAC flying the outer loops (`--controller mrac`).
+    pub fn with_mrac(config: CascadeConfig, mrac: MracConfig) -> Result<Self, MracConfigError> {
+        Ok(Self {
+            mrac: Some(Mrac::new(mrac)?),
+            ..Self::new(config)
+        })
+    }
+
+    /// The MRAC, when it flies the outer loops.
+    pub fn mrac(&self) -> Option<&Mrac<AUTOPILOT_CENTRES>> {
+        self.mrac.as_ref()
+    }
+
+    /// What the mixer delivered of the last demand, and whether the vehicle is airborne: the
+    /// MRAC's hedge and learning use them (the PID loops do not).
+    pub fn actuated(&mut self, achieved: &Demand, airborne: bool) {
+        self.airborne = airborne;
+        if let Some(m) = &mut self.mrac {
+            m.actuated(self.wanted_collective, achieved.collective);
+        }
+    }
+
+    /// Tells the MRAC what its pseudo-control became through the inversion: the model's
+    /// acceleration for the commanded tilt and lift, so the tilt limit and the lift floor are
+    /// hedged.
+    fn note_inversion(&mut self, target: &AttitudeTarget, state: &EstimatedState) {
+        let hover = self.config.hover_collective;
+        if let Some(m) = &mut self.mrac {
+            let (roll, pitch) = (target.roll_rad, target.pitch_rad);
+            let collective =
+                inversion::collective_for(target.lift_m_s2, roll, pitch, hover, 0.0, f32::INFINITY);
+            m.inverted(inversion::acceleration_of(
+                roll,
+                pitch,
+                state.yaw_rad,
+                collective,
+                hover,
+            ));
+        }
+    }
+
+    /// A fallback of the MRAC's adaptive element since the last call.
+    pub fn take_fallback(&mut self) -> Option<FallbackReason> {
+        self.mrac.as_mut().and_then(|m| m.take_fallback())
+    }
+
+    /// Forgets what the MRAC learned (on disarm: the next flight may carry another load).
+    pub fn forget_learning(&mut self) {
+        if let Some(m) = &mut self.mrac {
+            m.forget();
         }
     }
 
@@ -227,6 +298,9 @@ impl Cascade {
             .chain(self.rate.iter_mut())
         {
             pid.reset();
+        }
+        if let Some(m) = &mut self.mrac {
+            m.reset();
         }
         self.held = None;
         self.outer_elapsed_s = 0.0;
@@ -252,9 +326,23 @@ impl Cascade {
                 held
             }
             _ => {
-                let velocity_sp = self.velocity_setpoint(setpoint, state, elapsed)?;
-                let target =
-                    self.attitude_target(velocity_sp, setpoint.yaw_rad, state, elapsed, integrate)?;
+                let target = match self.adaptive_acceleration(setpoint, state, elapsed)? {
+                    Some(accel) => {
+                        let target = self.invert(accel, setpoint.yaw_rad, state);
+                        self.note_inversion(&target, state);
+                        target
+                    }
+                    None => {
+                        let velocity_sp = self.velocity_setpoint(setpoint, state, elapsed)?;
+                        self.attitude_target(
+                            velocity_sp,
+                            setpoint.yaw_rad,
+                            state,
+                            elapsed,
+                            integrate,
+                        )?
+                    }
+                };
                 self.held = Some(target);
                 self.outer_elapsed_s = 0.0;
                 target
@@ -262,8 +350,51 @@ impl Cascade {
         };
         target.yaw_rad = setpoint.yaw_rad;
         target.collective = self.collective(target.lift_m_s2, state);
+        if self.mrac.is_some() {
+            let c = &self.config;
+            self.wanted_collective = inversion::collective_for(
+                target.lift_m_s2,
+                state.roll_rad,
+                state.pitch_rad,
+                c.hover_collective,
+                0.0,
+                f32::INFINITY,
+            );
+        }
         let rate_sp = self.rate_setpoint(&target, state, dt)?;
         self.demand(&target, rate_sp, gyro_rad_s, dt, integrate)
+    }
+
+    /// The MRAC's outer loops: its pseudo-control (world acceleration, m/s^2), which goes
+    /// through the same inversion as the PID's; `None` when the PID loops fly.
+    fn adaptive_acceleration(
+        &mut self,
+        setpoint: &CascadeSetpoint,
+        state: &EstimatedState,
+        dt: f32,
+    ) -> Result<Option<[f32; 3]>, PidError> {
+        let airborne = self.airborne;
+        let Some(mrac) = &mut self.mrac else {
+            return Ok(None);
+        };
+        let [x, y] = match (setpoint.horizontal_m, setpoint.feed_forward_m_s) {
+            (Some([x, y]), None) => [Command::Position(x), Command::Position(y)],
+            (Some(p), Some(v)) => core::array::from_fn(|k| Command::Track {
+                position_m: p[k],
+                velocity_m_s: v[k],
+            }),
+            (None, _) => [Command::Off; 2],
+        };
+        let z = match setpoint.vertical {
+            Vertical::Height(h) => Command::Position(h),
+            Vertical::ClimbRate(rate) => Command::Velocity(rate),
+        };
+        mrac.step([x, y, z], state, dt, airborne)
+            .map_err(|e| match e {
+                MracError::NonFinite => PidError::NonFinite,
+                MracError::BadDt => PidError::BadDt,
+            })
+            .map(Some)
     }
 
     /// Position loop: world velocity setpoint (m/s).
@@ -279,6 +410,12 @@ impl Cascade {
                 for (axis, out) in v.iter_mut().enumerate() {
                     let x = state.position_m[axis];
                     *out = self.position[axis].update(target[axis], x, 0.0, dt, false)?;
+                }
+                if let Some(ff) = setpoint.feed_forward_m_s {
+                    if !(ff[0].is_finite() && ff[1].is_finite()) {
+                        return Err(PidError::NonFinite);
+                    }
+                    v = [v[0] + ff[0], v[1] + ff[1]];
                 }
                 Some(v)
             }
@@ -310,7 +447,6 @@ impl Cascade {
         dt: f32,
         integrate: bool,
     ) -> Result<AttitudeTarget, PidError> {
-        let c = &self.config;
         let mut accel = [0.0; 3];
         match velocity_sp.horizontal_m_s {
             Some(target) => {
@@ -327,37 +463,33 @@ impl Cascade {
         }
         let vz = state.velocity_m_s[2];
         accel[2] = self.velocity[2].update(velocity_sp.climb_m_s, vz, 0.0, dt, integrate)?;
-        // Vertical: never ask for less than 30 % of gravity, so the vehicle stays upright.
-        let lift = (GRAVITY_M_S2 + accel[2]).max(0.3 * GRAVITY_M_S2);
-        // Horizontal demand rotated into the heading frame, bounded by the tilt limit.
-        let (s, co) = libm::sincosf(state.yaw_rad);
-        let mut ax = co * accel[0] + s * accel[1];
-        let mut ay = -s * accel[0] + co * accel[1];
-        let max_h = lift * libm::tanf(c.max_tilt_rad);
-        let h = sqrtf(ax * ax + ay * ay);
-        if h > max_h {
-            ax *= max_h / h;
-            ay *= max_h / h;
-        }
-        // ZYX Euler, FLU: thrust along body z tilts to (cos(phi) sin(theta), -sin(phi)).
-        // cos(pitch) = lift / sqrt(lift^2 + ax^2), so roll needs no cosine of its own.
-        let pitch = atanf(ax / lift);
-        let roll = atanf(-ay / sqrtf(lift * lift + ax * ax));
-        Ok(AttitudeTarget {
-            roll_rad: roll,
-            pitch_rad: pitch,
+        Ok(self.invert(accel, yaw_sp, state))
+    }
+
+    /// The approximate inversion ([`inversion`]): world acceleration to tilt, lift and the
+    /// collective at the estimated tilt.
+    fn invert(&self, accel_m_s2: [f32; 3], yaw_sp: f32, state: &EstimatedState) -> AttitudeTarget {
+        let tilt = inversion::tilt_for(accel_m_s2, state.yaw_rad, self.config.max_tilt_rad);
+        AttitudeTarget {
+            roll_rad: tilt.roll_rad,
+            pitch_rad: tilt.pitch_rad,
             yaw_rad: yaw_sp,
-            collective: self.collective(lift, state),
-            lift_m_s2: lift,
-        })
+            collective: self.collective(tilt.lift_m_s2, state),
+            lift_m_s2: tilt.lift_m_s2,
+        }
     }
 
     /// The collective that gives `lift_m_s2` of vertical specific force at the estimated tilt.
     fn collective(&self, lift_m_s2: f32, state: &EstimatedState) -> f32 {
         let c = &self.config;
-        let tilt = cosf(state.roll_rad) * cosf(state.pitch_rad);
-        let collective = c.hover_collective * lift_m_s2 / GRAVITY_M_S2 / tilt.max(0.5);
-        collective.clamp(c.min_collective, c.max_collective)
+        inversion::collective_for(
+            lift_m_s2,
+            state.roll_rad,
+            state.pitch_rad,
+            c.hover_collective,
+            c.min_collective,
+            c.max_collective,
+        )
     }
 
     /// Attitude loop: body rate setpoint (rad/s); heading error wraps to (-pi, pi].
@@ -411,7 +543,8 @@ impl Cascade {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use libm::sinf;
+    use crate::msgs::GRAVITY_M_S2;
+    use libm::{cosf, sinf};
 
     fn level_at(position_m: [f32; 3]) -> EstimatedState {
         EstimatedState {
@@ -424,6 +557,7 @@ mod tests {
     fn hold(p: [f32; 3]) -> CascadeSetpoint {
         CascadeSetpoint {
             horizontal_m: Some([p[0], p[1]]),
+            feed_forward_m_s: None,
             vertical: Vertical::Height(p[2]),
             yaw_rad: 0.0,
         }
@@ -516,6 +650,7 @@ mod tests {
         s.velocity_m_s = [0.5, 0.5, 0.0];
         let sp = CascadeSetpoint {
             horizontal_m: None,
+            feed_forward_m_s: None,
             vertical: Vertical::ClimbRate(-0.5),
             yaw_rad: 0.0,
         };

@@ -6,19 +6,20 @@
 //! input is counted in [`FaultCounters`] and the step degrades (damped, level, or stopped) with
 //! finite motor commands.
 
-use super::events::EventLog;
+use super::events::{EventKind, EventLog};
 use super::mission::{Mission, MissionConfig};
 use super::supervisor::{Status, Supervisor, SupervisorConfig, EVENT_LOG_LEN};
 use crate::control::airframe::Airframe;
 use crate::control::cascade::{Cascade, CascadeConfig, CascadeSetpoint, Vertical};
 use crate::control::mixer::{Demand, Mixer};
+use crate::control::mrac::{FallbackReason, Mrac, MracConfig, AUTOPILOT_CENTRES};
 use crate::control::sas::{self, SasConfig};
 use crate::estimate::ekf::Outcome;
 use crate::estimate::estimator::{Estimator, EstimatorConfig, EstimatorCounters, Situation};
 use crate::estimate::pose_fix::CompanionFrame;
 use crate::msgs::{
-    EstimatedState, FailsafeReason, FlightMode, FrameKind, Inputs, MotorCommands, Outputs,
-    PilotInput, PositionSetpoint, ScanMatchStatus,
+    EstimatedState, FailsafeReason, FlightMode, FrameKind, Inputs, MissionSetpoint, MotorCommands,
+    Outputs, PilotInput, PositionSetpoint, ScanMatchStatus,
 };
 
 /// Everything the autopilot can be configured with; defaults are for the nominal 1 kg,
@@ -27,7 +28,11 @@ use crate::msgs::{
 pub struct AutopilotConfig {
     pub frame: FrameKind,
     pub estimator: EstimatorConfig,
+    /// Which law flies the position and velocity loops of the cascade.
+    pub controller: ControllerKind,
     pub cascade: CascadeConfig,
+    /// Used when `controller` is [`ControllerKind::Mrac`].
+    pub mrac: MracConfig,
     pub sas: SasConfig,
     pub supervisor: SupervisorConfig,
     pub landing: LandingConfig,
@@ -45,6 +50,18 @@ impl AutopilotConfig {
         c.cascade.effectiveness_rad_s2 = airframe.effectiveness_rad_s2();
         c
     }
+}
+
+/// The law that turns position commands into the acceleration the cascade's inversion flies:
+/// the only part of the loop that differs between the two.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ControllerKind {
+    /// Position and velocity PIDs (seed 000 Fig. 8-9).
+    #[default]
+    Pid,
+    /// Model-reference adaptive control with an RBF network and pseudo-control hedging
+    /// (seed 002 eqs. 7-12).
+    Mrac,
 }
 
 /// Descent rates and the on-ground test.
@@ -80,7 +97,7 @@ impl Default for LandingConfig {
 }
 
 /// Faults the autopilot survived, by kind.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FaultCounters {
     /// Steps with a non-finite, non-positive or too long `dt`.
     pub bad_dt: u32,
@@ -92,6 +109,10 @@ pub struct FaultCounters {
     pub control_errors: u32,
     /// Steps where the mixer had to cut the request to fit the motors.
     pub mixer_saturated: u32,
+    /// Mission setpoints with a non-finite value (ignored).
+    pub bad_mission: u32,
+    /// Time the mixer spent cutting requests, s (`mixer_saturated` in seconds).
+    pub saturated_s: f64,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -115,12 +136,26 @@ pub struct Autopilot {
 }
 
 impl Autopilot {
+    /// The autopilot for `config`. An MRAC configuration that fails its validation is not
+    /// flown: the PID cascade flies instead and the event log starts with
+    /// [`FallbackReason::InvalidConfig`] (check [`MracConfig::validate`] first to refuse it).
     pub fn new(config: AutopilotConfig) -> Self {
+        let mut supervisor = Supervisor::new(config.supervisor);
+        let cascade = match config.controller {
+            ControllerKind::Pid => Cascade::new(config.cascade),
+            ControllerKind::Mrac => {
+                Cascade::with_mrac(config.cascade, config.mrac).unwrap_or_else(|_| {
+                    let reason = FallbackReason::InvalidConfig;
+                    supervisor.record(0.0, EventKind::AdaptiveFallback(reason));
+                    Cascade::new(config.cascade)
+                })
+            }
+        };
         Self {
             config,
             estimator: Estimator::new(config.estimator),
-            supervisor: Supervisor::new(config.supervisor),
-            cascade: Cascade::new(config.cascade),
+            supervisor,
+            cascade,
             mixer: Mixer::new(config.frame),
             mission: Mission::new(config.mission),
             home: PositionSetpoint::default(),
@@ -148,6 +183,11 @@ impl Autopilot {
 
     pub fn events(&self) -> &EventLog<EVENT_LOG_LEN> {
         self.supervisor.events()
+    }
+
+    /// The MRAC flying the outer loops, if it does (its weight norm, hedge and fallback).
+    pub fn mrac(&self) -> Option<&Mrac<AUTOPILOT_CENTRES>> {
+        self.cascade.mrac()
     }
 
     /// The exploration mission's state and refused companion inputs.
@@ -250,7 +290,11 @@ impl Autopilot {
         let failsafe = self.supervisor.failsafe();
 
         // ---- guide: what this mode asks for ----
-        let setpoint = self.guide(mode, failsafe, &estimate, inputs.t_s);
+        let mission = self.follow(mode, inputs.mission);
+        let mut setpoint = self.guide(mode, failsafe, &estimate, inputs.t_s);
+        if let Some(sp) = setpoint.as_mut() {
+            sp.feed_forward_m_s = mission;
+        }
 
         // ---- control: cascade in the autonomous modes, rate damping in manual ----
         let airborne = estimate.position_m[2] > self.config.landing.ground_height_m;
@@ -260,13 +304,18 @@ impl Autopilot {
             (FlightMode::Manual, _) => Some(self.manual(&pilot, rates)),
             (_, Some(sp)) => {
                 let integrate = airborne && !self.saturated;
-                match self.cascade.run(&sp, &estimate, rates, dt, integrate) {
-                    Ok(d) => Some(d),
+                let demand = match self.cascade.run(&sp, &estimate, rates, dt, integrate) {
+                    Ok(d) => d,
                     Err(_) => {
                         self.faults.control_errors = self.faults.control_errors.saturating_add(1);
-                        Some(self.damped_hover(rates))
+                        self.damped_hover(rates)
                     }
+                };
+                if let Some(reason) = self.cascade.take_fallback() {
+                    let event = EventKind::AdaptiveFallback(reason);
+                    self.supervisor.record(inputs.t_s, event);
                 }
+                Some(demand)
             }
             (_, None) => Some(self.damped_hover(rates)),
         };
@@ -280,7 +329,9 @@ impl Autopilot {
                 self.saturated = mixed.saturated;
                 if mixed.saturated {
                     self.faults.mixer_saturated = self.faults.mixer_saturated.saturating_add(1);
+                    self.faults.saturated_s += f64::from(dt);
                 }
+                self.cascade.actuated(&mixed.achieved, airborne);
                 mixed.motors
             }
             None => MotorCommands::STOPPED,
@@ -319,12 +370,38 @@ impl Autopilot {
                 self.home.position_m[1] = land_xy[1];
                 self.home.yaw_rad = e.yaw_rad;
             }
-            FlightMode::Disarmed | FlightMode::Killed => self.saturated = false,
+            FlightMode::Disarmed | FlightMode::Killed => {
+                self.saturated = false;
+                self.cascade.forget_learning();
+            }
             FlightMode::Land | FlightMode::Manual | FlightMode::Explore | FlightMode::Return => {}
         }
         self.mission.enter(mode, t_s);
         self.cascade.reset();
         self.mode = mode;
+    }
+
+    /// A mission setpoint, in Hold, becomes the hold point (so the vehicle stays where the
+    /// mission left it when the setpoints stop); returns its velocity to feed forward. Other
+    /// modes ignore the mission: takeoff, landing and failsafes keep their own setpoints.
+    /// A setpoint with a non-finite value is ignored whole.
+    fn follow(&mut self, mode: FlightMode, mission: Option<MissionSetpoint>) -> Option<[f32; 2]> {
+        let m = mission.filter(|_| mode == FlightMode::Hold)?;
+        let finite = m
+            .position_m
+            .iter()
+            .chain(&m.velocity_m_s)
+            .all(|v| v.is_finite())
+            && m.yaw_rad.is_finite();
+        if !finite {
+            self.faults.bad_mission = self.faults.bad_mission.saturating_add(1);
+            return None;
+        }
+        self.home = PositionSetpoint {
+            position_m: m.position_m,
+            yaw_rad: m.yaw_rad,
+        };
+        Some(m.velocity_m_s)
     }
 
     /// The cascade setpoint of each flying mode.
@@ -340,6 +417,7 @@ impl Autopilot {
         match mode {
             FlightMode::Takeoff | FlightMode::Hold => Some(CascadeSetpoint {
                 horizontal_m: Some(hold_xy),
+                feed_forward_m_s: None,
                 vertical: Vertical::Height(self.home.position_m[2]),
                 yaw_rad,
             }),
@@ -352,6 +430,7 @@ impl Autopilot {
                 let [x, y, yaw_rad] = self.mission.target(t_s, &frame, e, gain, lidar_lost);
                 Some(CascadeSetpoint {
                     horizontal_m: Some([x, y]),
+                    feed_forward_m_s: None,
                     vertical: Vertical::Height(self.home.position_m[2]),
                     yaw_rad,
                 })
@@ -373,6 +452,7 @@ impl Autopilot {
                 let trusted = e.valid && failsafe != Some(FailsafeReason::LidarLost);
                 Some(CascadeSetpoint {
                     horizontal_m: trusted.then_some(hold_xy),
+                    feed_forward_m_s: None,
                     vertical: Vertical::ClimbRate(-rate),
                     yaw_rad,
                 })

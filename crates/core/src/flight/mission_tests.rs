@@ -103,7 +103,7 @@ fn modes(f: &Flight) -> Vec<FlightMode> {
         .iter()
         .filter_map(|e| match e.kind {
             EventKind::ModeChange { to, .. } => Some(to),
-            EventKind::Failsafe(_) => None,
+            EventKind::Failsafe(_) | EventKind::AdaptiveFallback(_) => None,
         })
         .collect()
 }

@@ -126,6 +126,12 @@ impl Supervisor {
         &self.events
     }
 
+    /// Logs what another part of the autopilot reports (the controller's fallbacks), beside
+    /// the mode changes and failsafes.
+    pub fn record(&mut self, t_s: f64, kind: EventKind) {
+        self.events.push(t_s, kind);
+    }
+
     /// One decision. Returns the mode to fly this step.
     pub fn update(&mut self, s: &Status) -> FlightMode {
         // SAFETY-CRITICAL: the kill switch wins over every other input and every mode.

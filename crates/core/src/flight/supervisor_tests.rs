@@ -75,7 +75,7 @@ fn a_normal_flight_goes_through_every_mode_and_logs_it() {
     let modes: [FlightMode; 4] = {
         let mut it = s.sup.events().iter().map(|e| match e.kind {
             EventKind::ModeChange { to, .. } => to,
-            EventKind::Failsafe(_) => FlightMode::Killed,
+            EventKind::Failsafe(_) | EventKind::AdaptiveFallback(_) => FlightMode::Killed,
         });
         core::array::from_fn(|_| it.next().unwrap())
     };

@@ -195,6 +195,7 @@ impl TestVehicle {
                 voltage_v: self.battery_v,
             }),
             pilot: self.pilot,
+            mission: None,
             companion: Default::default(),
         }
     }

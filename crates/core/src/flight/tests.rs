@@ -311,6 +311,7 @@ fn autopilot_size_is_small_and_known() {
     let size = core::mem::size_of::<Autopilot>();
     std::println!("size_of::<Autopilot>() = {size} bytes");
     // About 4 KiB with the exploration mission's state (its config, the latest setpoint, the
-    // companion frame's anchor and tallies: some 150 bytes); a bound, not a target.
-    assert!(size <= 4608, "{size}");
+    // companion frame's anchor and tallies: some 150 bytes), plus the MRAC's state (about
+    // 1.4 kB), which is part of the cascade whichever controller flies; a bound, not a target.
+    assert!(size <= 6656, "{size}");
 }

@@ -5,6 +5,7 @@ use crate::runner::pilot::TestPilot;
 use crate::sensors::imu::ImuParams;
 use crate::sensors::lidar::LidarProfile;
 use crate::sensors::sonar::SonarParams;
+use crate::vehicle::model_error::ModelError;
 use crate::vehicle::VehicleParams;
 use crate::world::{World, WorldError};
 
@@ -12,7 +13,10 @@ use crate::world::{World, WorldError};
 #[derive(Clone, Debug)]
 pub struct SimConfig {
     pub world: World,
+    /// The vehicle the onboard software is configured for (and the test pilot flies by).
     pub vehicle: VehicleParams,
+    /// How the simulated body differs from `vehicle`; the onboard software is not told.
+    pub model_error: ModelError,
     pub lidar: LidarProfile,
     pub imu: ImuParams,
     pub sonar: SonarParams,
@@ -36,6 +40,7 @@ impl SimConfig {
         Self {
             world,
             vehicle: VehicleParams::f450(),
+            model_error: ModelError::NONE,
             lidar,
             imu: ImuParams::adis16365(),
             sonar: SonarParams::mb1040(),
@@ -56,6 +61,7 @@ impl SimConfig {
     pub fn validate(&self) -> Result<TestPilot, SetupError> {
         let v = &self.vehicle;
         v.validate().map_err(SetupError::Vehicle)?;
+        self.model_error.validate(v).map_err(SetupError::Vehicle)?;
         let start = [self.world.start[0], self.world.start[1]];
         self.world
             .check_free(start, v.radius_m, "start")

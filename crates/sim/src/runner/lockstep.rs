@@ -100,6 +100,9 @@ pub(super) struct Lockstep<'c> {
     scan_truth: TruthPose,
     /// The test pilot's latest reference position.
     reference: Option<Vec3>,
+    /// Each rotor's random thrust mismatch, kept to rebuild the dynamics when the body
+    /// changes (a payload's release).
+    mismatch: [f64; 4],
     /// Physics steps taken.
     k: u64,
     /// The time of step `k`, worked out once per step (the end of one step is the start of the
@@ -132,7 +135,8 @@ impl<'c> Lockstep<'c> {
         let hz = config.physics_hz;
         let dt = 1.0 / hz;
         let mut mismatch_rng = Rng::fork(config.seed, stream::MISMATCH);
-        let mismatch = core::array::from_fn(|_| 1.0 + v.motor_mismatch * mismatch_rng.gauss());
+        let mismatch: [f64; 4] =
+            core::array::from_fn(|_| 1.0 + v.motor_mismatch * mismatch_rng.gauss());
         let sensors = Sensors {
             lidar: Lidar::new(
                 config.lidar.clone(),
@@ -210,10 +214,30 @@ impl<'c> Lockstep<'c> {
             out,
             inbox: Inbox::default(),
             reference: None,
+            mismatch,
             k: 0,
             t: 0.0,
         };
-        Ok((run, Dynamics::new(v, mismatch, dt), s))
+        let body = config.model_error.body(v, true);
+        Ok((run, Dynamics::with_body(v, &body, mismatch, dt), s))
+    }
+
+    /// The physics step at which the body changes (the model error's payload release).
+    pub(super) fn body_change_step(&self) -> Option<u64> {
+        let t = self.config.model_error.change_at_s()?;
+        Some((t * self.hz).ceil() as u64)
+    }
+
+    /// The dynamics of the body after its change (the payload released).
+    pub(super) fn dynamics_after_change(&self) -> Dynamics {
+        let (config, v) = (self.config, &self.config.vehicle);
+        let body = config.model_error.body(v, false);
+        Dynamics::with_body(v, &body, self.mismatch, self.dt)
+    }
+
+    /// Physics steps taken so far.
+    pub(super) fn steps(&self) -> u64 {
+        self.k
     }
 
     /// Whether the flight has time left.

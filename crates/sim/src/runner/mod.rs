@@ -1,5 +1,6 @@
 //! The run: the lockstep runner (this module and `lockstep`), who flies ([`pilot`], the
-//! ground-truth test pilot, flying a [`plan`]; or the onboard stack through [`onboard_link`]),
+//! ground-truth test pilot, flying a [`plan`]; or the onboard stack through [`onboard_link`],
+//! perhaps on a [`mission`]),
 //! and the ground-truth relations between scans ([`truth`]).
 //!
 //! The lockstep runner: one fixed physics step at a time (default 1 kHz), sensors sampled at
@@ -12,6 +13,7 @@
 mod config;
 mod lockstep;
 pub mod companion;
+pub mod mission;
 pub mod onboard_link;
 pub mod pilot;
 pub mod plan;
@@ -34,8 +36,15 @@ pub fn run<'a>(
     pilot: Pilot<'a>,
     recorder: &mut dyn Recorder,
 ) -> Result<Outcome, SetupError> {
-    let (mut sim, dynamics, mut body) = Lockstep::new(config, pilot)?;
+    let (mut sim, mut dynamics, mut body) = Lockstep::new(config, pilot)?;
+    // The body changes at most once (a payload's release): the dynamics are rebuilt then,
+    // so the step itself never asks whether its constants are still right.
+    let mut change = sim.body_change_step();
     while sim.running() {
+        if change == Some(sim.steps()) {
+            change = None;
+            dynamics = sim.dynamics_after_change();
+        }
         if let Err(end) = sim.step(&dynamics, &mut body, recorder) {
             return Ok(sim.finish(end));
         }

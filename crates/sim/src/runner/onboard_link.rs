@@ -10,10 +10,12 @@
 //! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
 //! to. The runner never hands the stack ground truth; the log holds only onboard values.
 
+use crate::runner::mission::Mission;
 use crate::runner::{FlightSoftware, SensorFrame, SetupError, STATE_RATE_HZ};
 use crate::sensors::lidar::{LidarProfile, LidarScan};
 use crate::vehicle::{Frame, VehicleParams};
 use plumbline_core::control::airframe::Airframe;
+use plumbline_core::control::mrac::FallbackReason;
 use plumbline_core::flight::autopilot::AutopilotConfig;
 use plumbline_core::flight::onboard::Onboard;
 use plumbline_core::matching::OdometryConfig;
@@ -58,6 +60,8 @@ pub struct Script {
     pub radio: Vec<(f64, PilotInput)>,
     /// The lidar stops delivering revolutions from this time on.
     pub lidar_dies_at_s: Option<f64>,
+    /// Setpoints streamed to the stack while the mission lasts.
+    pub mission: Option<Mission>,
 }
 
 impl Script {
@@ -72,6 +76,7 @@ impl Script {
                 },
             )],
             lidar_dies_at_s: None,
+            mission: None,
         }
     }
 
@@ -106,6 +111,16 @@ pub struct FlightLog {
     pub samples: Vec<OnboardSample>,
     /// Scan points the matcher's dynamic-object test rejected (seed 000 sec. 4.2).
     pub rejected_points: u64,
+    /// Time the mixer had to cut the controller's request to fit the motors, s.
+    pub saturation_s: f64,
+    /// How much later than planned the script's mission started (it waits for Hold), s;
+    /// `None` when the stack never held, so the mission never started.
+    pub mission_shift_s: Option<f64>,
+    /// The MRAC's adaptive weight norm at the end and at its largest (`None` with the PID).
+    pub adaptive_weight_norm: Option<f64>,
+    pub max_adaptive_weight_norm: Option<f64>,
+    /// When and why the MRAC's adaptive element first fell back to the baseline, if it did.
+    pub adaptive_fallback: Option<(f64, FallbackReason)>,
     /// Sum over Hold steps and motors of the squared rate of change of the command, 1/s^2.
     jitter_sum: f64,
     jitter_terms: u64,
@@ -148,6 +163,8 @@ pub struct OnboardLink<const N: usize> {
     /// The revolution being handed over, in the onboard format.
     scan: Box<Scan<N>>,
     next_sample_s: f64,
+    /// Set when the stack first holds: how much later than planned the mission flies.
+    mission_shift_s: Option<f64>,
     log: Rc<RefCell<FlightLog>>,
 }
 
@@ -173,6 +190,7 @@ impl<const N: usize> OnboardLink<N> {
             last_imu: ImuSample::default(),
             scan: Box::new(Scan::new(0.0)),
             next_sample_s: 0.0,
+            mission_shift_s: None,
             log: log.clone(),
         };
         Ok((link, log))
@@ -234,16 +252,41 @@ impl<const N: usize> OnboardLink<N> {
             scan_match: None,
             battery: Some(frame.battery),
             pilot: self.script.radio_at(frame.t_s),
+            mission: self.mission_shift_s.and_then(|shift| {
+                let m = self.script.mission.as_ref()?;
+                m.setpoint(frame.t_s - shift)
+            }),
             companion: messages,
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
+        if let (None, Some(m), FlightMode::Hold) =
+            (self.mission_shift_s, &self.script.mission, out.mode)
+        {
+            self.mission_shift_s = Some(m.shift_for(frame.t_s));
+        }
         let mut log = self.log.borrow_mut();
+        log.mission_shift_s = self.mission_shift_s;
         if log.modes.last().is_none_or(|(_, m)| *m != out.mode) {
             log.modes.push((frame.t_s, out.mode));
         }
         log.failsafe = out.failsafe.or(log.failsafe);
         log.last_estimate = out.estimate;
         log.rejected_points = self.onboard.rejected_points();
+        let autopilot = self.onboard.autopilot();
+        log.saturation_s = autopilot.faults().saturated_s;
+        // The norm after disarm is the forgotten one (zero): report the flight's.
+        if let Some(mrac) = autopilot
+            .mrac()
+            .filter(|_| out.mode != FlightMode::Disarmed)
+        {
+            let norm = f64::from(mrac.weight_norm());
+            log.adaptive_weight_norm = Some(norm);
+            log.max_adaptive_weight_norm =
+                Some(log.max_adaptive_weight_norm.map_or(norm, |m| m.max(norm)));
+            if log.adaptive_fallback.is_none() {
+                log.adaptive_fallback = mrac.fallback().map(|r| (frame.t_s, r));
+            }
+        }
         log.record(dt_s, out.mode, out.motors.throttle_norm);
         if frame.t_s >= self.next_sample_s {
             self.next_sample_s = frame.t_s + 1.0 / STATE_RATE_HZ;

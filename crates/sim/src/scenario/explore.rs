@@ -82,7 +82,7 @@ fn crew<const N: usize>(
     config: &SimConfig,
     companion: CompanionParts,
 ) -> Result<(ExploreCrew<N>, Rc<RefCell<FlightLog>>), ScenarioError> {
-    let (odometry, autopilot) = onboard::stack(options, config);
+    let (odometry, autopilot) = onboard::stack(options, config)?;
     let script = Script::arm_at(ARM_AT_S);
     let (link, log) = OnboardLink::<N>::new(&config.lidar, odometry, autopilot, script)
         .map_err(ScenarioError::Setup)?;

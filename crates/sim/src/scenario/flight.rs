@@ -4,8 +4,10 @@
 
 use super::explore_score::Exploration;
 use super::score::{self, Judge, Score};
+use super::track::TrackShape;
 use crate::disturb::Push;
 use crate::runner::companion::{AnyExploreCrew, CompanionLog, Strategy};
+use crate::runner::mission::Mission;
 use crate::runner::onboard_link::FlightLog;
 use crate::runner::plan::Plan;
 use crate::runner::{self, Outcome, Pilot, Recorder, SetupError, SimConfig};
@@ -29,7 +31,8 @@ pub struct Entry {
 pub enum Controller {
     /// The onboard cascade of PID loops.
     Pid,
-    /// Model-reference adaptive control with pseudo-control hedging (not implemented yet).
+    /// The onboard cascade with model-reference adaptive control (an RBF network with
+    /// e-modification and pseudo-control hedging) in place of its position and velocity PIDs.
     Mrac,
     /// The simulator's ground-truth pilot.
     TestPilot,
@@ -68,6 +71,8 @@ pub struct Options {
     pub duration_s: Option<f64>,
     /// How an exploring vehicle chooses where to go.
     pub strategy: Strategy,
+    /// The path of the `track` scenario.
+    pub track: TrackShape,
 }
 
 impl Default for Options {
@@ -79,6 +84,7 @@ impl Default for Options {
             dynamic_rejection: true,
             duration_s: None,
             strategy: Strategy::default(),
+            track: TrackShape::default(),
         }
     }
 }
@@ -154,16 +160,18 @@ impl Flight {
     }
 
     /// Onboard software that logs into `log`, scored on holding over the start; `push` is the
-    /// scenario's own push, whose effect is scored apart.
+    /// scenario's own push, whose effect is scored apart; the `mission` it flies, if any, is
+    /// scored on tracking.
     pub fn onboard(
         pilot: Pilot<'static>,
         log: Rc<RefCell<FlightLog>>,
         push: Option<Push>,
+        mission: Option<Mission>,
         config: &SimConfig,
     ) -> Self {
         Self {
             crew: Crew::Ready(pilot),
-            judge: Judge::Onboard { log, push },
+            judge: Judge::Onboard { log, push, mission },
             planned_s: config.max_duration_s,
         }
     }
@@ -201,14 +209,6 @@ impl Entry {
         options: &Options,
         config: &mut SimConfig,
     ) -> Result<Flight, ScenarioError> {
-        if options.controller == Some(Controller::Mrac) {
-            return Err(ScenarioError::Controller {
-                scenario: self.name,
-                controller: Controller::Mrac,
-                reason: "mrac is not implemented yet (MRAC with PCH is planned)",
-                instead: Some(Controller::Pid),
-            });
-        }
         let flight = (self.prepare)(options, config)?;
         for p in &config.world.path {
             config

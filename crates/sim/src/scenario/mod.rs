@@ -14,6 +14,8 @@
 //! - `explore` ([`explore`]): the vehicle explores the world on its SLAM map with its
 //!   companion computer, comes home and lands; scored on what it saw ([`coverage`],
 //!   [`explore_score`]).
+//! - `track` ([`track`]): the onboard stack flies a square or a figure of eight fed to it as
+//!   mission setpoints; scored on the tracking error.
 //!
 //! Adding a scenario is one new file and one catalogue entry: write `scenario/NAME.rs` with a
 //! `pub(super) const ENTRY: Entry` (its parts come from `super::flight`) whose `prepare`
@@ -33,17 +35,20 @@ pub mod low_battery;
 pub mod onboard;
 pub mod score;
 pub mod survey;
+pub mod track;
 
 pub use flight::{fly, Controller, Entry, Flight, Options, Report, ScenarioError, Tuning};
+pub use track::TrackShape;
 
 /// Every scenario, as named on the command line.
-pub static CATALOGUE: [Entry; 6] = [
+pub static CATALOGUE: [Entry; 7] = [
     survey::ENTRY,
     hold::ENTRY,
     hold::WITH_PEOPLE,
     low_battery::ENTRY,
     lidar_failure::ENTRY,
     explore::ENTRY,
+    track::ENTRY,
 ];
 
 /// The scenario called `name`.

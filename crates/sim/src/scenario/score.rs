@@ -4,7 +4,9 @@
 //!
 //! The test pilot is scored on following its plan, sampled at each of its steps; the onboard
 //! stack on holding over the start, from the truth sampled at [`STATE_RATE_HZ`] while its own
-//! log says it was in Hold.
+//! log says it was in Hold, and on a mission on the tracking error: the horizontal distance
+//! between the true position and the mission's setpoint at the same instant, over the
+//! mission (the hold error leaves the mission and its settling out).
 //!
 //! [`STATE_RATE_HZ`]: crate::runner::STATE_RATE_HZ
 
@@ -12,8 +14,10 @@ use super::explore_score::{Exploration, ExploreLogs, ExploreScore, ExploreWatch}
 use crate::disturb::Push;
 use crate::math::Vec3;
 use crate::runner::companion::{CompanionLog, Strategy};
+use crate::runner::mission::Mission;
 use crate::runner::onboard_link::FlightLog;
 use crate::runner::{Outcome, Recorder, SimConfig, StateSample, Status, TruthPose};
+use crate::scenario::track::to_world;
 use crate::sensors::lidar::LidarScan;
 use plumbline_core::msgs::{FlightMode, ImuSample, SonarSample};
 use plumbline_explore::Explorer;
@@ -90,6 +94,8 @@ pub struct Score {
     pub hold: Option<HoldError>,
     /// Distance between the onboard estimate and the truth at the end, m (onboard only).
     pub estimate_drift_m: Option<f64>,
+    /// From the mission's setpoints while it lasted (onboard flights with a mission only).
+    pub track: Option<HoldError>,
     pub onboard: Option<OnboardScore>,
     pub explore: Option<ExploreScore>,
 }
@@ -110,10 +116,11 @@ pub(super) enum Judge {
     /// The test pilot: against its plan.
     Tracking,
     /// The onboard stack, logging into `log`: holding over the start; `push` is the
-    /// scenario's own push.
+    /// scenario's own push; `mission` the path it was sent, if any.
     Onboard {
         log: Rc<RefCell<FlightLog>>,
         push: Option<Push>,
+        mission: Option<Mission>,
     },
     /// The onboard stack with its exploring companion: scored on what it saw, how safely,
     /// and how it came home.
@@ -167,9 +174,10 @@ impl<'r> Scorer<'r> {
                 };
                 (score, None, None)
             }
-            Judge::Onboard { log, push } => {
+            Judge::Onboard { log, push, mission } => {
                 let log = unshare(log);
-                let score = score_onboard(&log, push, config, outcome, &self.states);
+                let score =
+                    score_onboard(&log, push, mission.as_ref(), config, outcome, &self.states);
                 (score, Some(log), None)
             }
             Judge::Explore {
@@ -179,7 +187,7 @@ impl<'r> Scorer<'r> {
                 explorer,
             } => {
                 let log = unshare(log);
-                let mut score = score_onboard(&log, None, config, outcome, &self.states);
+                let mut score = score_onboard(&log, None, None, config, outcome, &self.states);
                 let watch = self.explore.unwrap_or_else(|| ExploreWatch::new(config));
                 let logs = ExploreLogs {
                     strategy,
@@ -237,11 +245,40 @@ fn hold_windows(log: &FlightLog, end_s: f64) -> Vec<(f64, f64)> {
     windows
 }
 
+/// Whether `t` falls in a push of `config` or its recovery allowance.
+fn recovering(config: &SimConfig, t: f64) -> bool {
+    config
+        .pushes
+        .iter()
+        .any(|p| t >= p.start_s && t < p.start_s + p.duration_s + RECOVERY_ALLOWANCE_S)
+}
+
+/// The tracking error of the true `states` from `mission`'s setpoints (estimate frame, which
+/// starts at the take-off pose) while it lasted, `shift_s` later than planned.
+fn track_error(
+    mission: &Mission,
+    shift_s: f64,
+    config: &SimConfig,
+    states: &[StateSample],
+) -> Option<HoldError> {
+    let mut tally = ErrorTally::default();
+    for s in states {
+        if let Some((p, _)) = mission.at(s.t_s - shift_s) {
+            tally.add(horizontal_error(
+                s.position,
+                to_world(config.world.start, p),
+            ));
+        }
+    }
+    tally.result()
+}
+
 /// Scores an onboard flight on the truth `states`: holding over the start outside the pushes
 /// (and their recovery), the scenario's `push`, drift of the estimate, landing.
 fn score_onboard(
     log: &FlightLog,
     push: Option<Push>,
+    mission: Option<&Mission>,
     config: &SimConfig,
     outcome: &Outcome,
     states: &[StateSample],
@@ -249,13 +286,15 @@ fn score_onboard(
     let start = [config.world.start[0], config.world.start[1]];
     let end_s = states.last().map_or(0.0, |s| s.t_s);
     let windows = hold_windows(log, end_s);
-    let recovering = |t: f64| {
-        config
-            .pushes
-            .iter()
-            .any(|p| t >= p.start_s && t < p.start_s + p.duration_s + RECOVERY_ALLOWANCE_S)
+    // A mission's path (as late as it started) and its settling are tracking, not station
+    // keeping.
+    let shift = log.mission_shift_s.unwrap_or(0.0);
+    let flying_mission = |t: f64| {
+        mission.is_some_and(|m| t >= m.start_s() + shift && t < m.end_s() + shift + SETTLE_S)
     };
-    let holding = |t: f64| windows.iter().any(|w| t >= w.0 && t < w.1) && !recovering(t);
+    let holding = |t: f64| {
+        windows.iter().any(|w| t >= w.0 && t < w.1) && !recovering(config, t) && !flying_mission(t)
+    };
     let hold = hold_error(states, start, holding);
     // The scenario's push: how far it carried the vehicle and how soon it was back.
     let pushed = push.filter(|p| config.pushes.contains(p) && end_s > p.start_s + p.duration_s);
@@ -275,19 +314,17 @@ fn score_onboard(
     };
     // The estimate frame starts at the take-off pose.
     let drift = states.last().map(|s| {
-        let (sin, cos) = config.world.start[2].sin_cos();
         let [ex, ey, _] = log.last_estimate.position_m.map(f64::from);
-        let estimate = [
-            start[0] + cos * ex - sin * ey,
-            start[1] + sin * ex + cos * ey,
-        ];
-        horizontal_error(s.position, estimate)
+        horizontal_error(s.position, to_world(config.world.start, [ex, ey]))
     });
     let crashed = matches!(outcome.status, Status::Crashed { .. });
     let flew = log.modes.iter().any(|m| m.1 == FlightMode::Takeoff);
     Score {
         hold,
         estimate_drift_m: drift,
+        track: mission
+            .zip(log.mission_shift_s)
+            .and_then(|(m, shift)| track_error(m, shift, config, states)),
         onboard: Some(OnboardScore {
             push_max_error_m,
             recovery_s,

@@ -10,6 +10,7 @@
 
 pub mod battery;
 pub mod dynamics;
+pub mod model_error;
 pub mod motors;
 pub mod power;
 

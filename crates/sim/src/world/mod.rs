@@ -114,6 +114,7 @@ pub const SHIPPED: &[(&str, &str)] = &[
     ("office", include_str!("../../worlds/office.world")),
     ("building", include_str!("../../worlds/building.world")),
     ("intel", include_str!("../../worlds/intel.world")),
+    ("hall", include_str!("../../worlds/hall.world")),
 ];
 
 fn closed_loop(points: &[[f64; 2]]) -> impl Iterator<Item = Segment> + '_ {
