@@ -34,7 +34,7 @@ enum Command {
     /// Lidar devices: decode raw captures, record from a serial port, plot a revolution.
     Lidar(lidar_cmd::LidarArgs),
     /// Fly the simulator: emulated lidar/IMU/sonar logs with exact ground truth.
-    Sim(sim::SimArgs),
+    Sim(Box<sim::SimArgs>),
 }
 
 fn main() -> ExitCode {
@@ -44,7 +44,7 @@ fn main() -> ExitCode {
         Command::Slam(args) => slam_cmd::run(args),
         Command::Eval(args) => eval_cmd::run(args),
         Command::Lidar(args) => lidar_cmd::run(args),
-        Command::Sim(args) => sim::run(args),
+        Command::Sim(args) => sim::run(*args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -37,7 +37,10 @@ mod tests {
         assert_eq!(hedge([1.0, -0.5, 0.3], [1.0, -0.5, 0.3], 1.0), [0.0; 3]);
         // The tilt limit cut 5 m/s^2 forward to 3.6.
         let h = hedge([5.0, 0.0, 0.0], [3.6, 0.0, 0.0], 1.0);
-        assert!((h[0] - 1.4).abs() < 1e-6 && h[1] == 0.0 && h[2] == 0.0, "{h:?}");
+        assert!(
+            (h[0] - 1.4).abs() < 1e-6 && h[1] == 0.0 && h[2] == 0.0,
+            "{h:?}"
+        );
         // The motors gave 90 % of the thrust for hover: a tenth of g short vertically.
         let h = hedge([0.0; 3], [0.0; 3], 0.9);
         assert!((h[2] - 0.1 * GRAVITY_M_S2).abs() < 1e-5, "{h:?}");

@@ -232,17 +232,11 @@ fn bad_inputs_are_refused_without_changing_state() {
         ..Default::default()
     };
     let cmd = [Command::Position(0.0); 3];
-    assert_eq!(
-        m.step(cmd, &nan, DT, true),
-        Err(MracError::NonFinite)
-    );
+    assert_eq!(m.step(cmd, &nan, DT, true), Err(MracError::NonFinite));
     let ok = EstimatedState::default();
     assert_eq!(m.step(cmd, &ok, 0.0, true), Err(MracError::BadDt));
     let bad_cmd = [Command::Off, Command::Off, Command::Velocity(f32::INFINITY)];
-    assert_eq!(
-        m.step(bad_cmd, &ok, DT, true),
-        Err(MracError::NonFinite)
-    );
+    assert_eq!(m.step(bad_cmd, &ok, DT, true), Err(MracError::NonFinite));
     assert_eq!(m, before);
     let mut c = MracConfig::default();
     c.pd_xy.kp_per_s2 = 0.0;
