@@ -102,6 +102,7 @@ fn fly(vehicle: &mut Vehicle) -> Report {
                 ..PilotInput::default()
             },
             mission: None,
+            companion: Default::default(),
         });
         let outputs = vehicle.onboard.step(&inputs, scan.as_ref(), DT_S);
         report.motors_finite &= outputs.motors.throttle_norm.iter().all(|m| m.is_finite());

@@ -69,6 +69,7 @@ fn parse_inputs(text: &str) -> Vec<Step> {
                     battery: None,
                     pilot,
                     mission: None,
+                    companion: Default::default(),
                 },
                 scan: None,
             });

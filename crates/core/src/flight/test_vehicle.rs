@@ -196,6 +196,7 @@ impl TestVehicle {
             }),
             pilot: self.pilot,
             mission: None,
+            companion: Default::default(),
         }
     }
 }

@@ -239,6 +239,7 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
                 let m = self.script.mission.as_ref()?;
                 m.setpoint(frame.t_s - shift)
             }),
+            companion: Default::default(),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         if let (None, Some(m), FlightMode::Hold) =
@@ -256,7 +257,11 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
         log.rejected_points = self.onboard.rejected_points();
         let autopilot = self.onboard.autopilot();
         log.saturation_s = autopilot.faults().saturated_s;
-        if let Some(mrac) = autopilot.mrac() {
+        // The norm after disarm is the forgotten one (zero): report the flight's.
+        if let Some(mrac) = autopilot
+            .mrac()
+            .filter(|_| out.mode != FlightMode::Disarmed)
+        {
             let norm = f64::from(mrac.weight_norm());
             log.adaptive_weight_norm = Some(norm);
             log.max_adaptive_weight_norm =

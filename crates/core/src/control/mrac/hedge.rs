@@ -34,7 +34,8 @@ mod tests {
 
     #[test]
     fn only_what_was_not_delivered_is_hedged() {
-        assert_eq!(hedge([1.0, -0.5, 0.3], [1.0, -0.5, 0.3], 1.0), [0.0; 3]);
+        let h = hedge([1.0, -0.5, 0.3], [1.0, -0.5, 0.3], 1.0);
+        assert!(h.iter().all(|x| x.abs() < 1e-6), "{h:?}");
         // The tilt limit cut 5 m/s^2 forward to 3.6.
         let h = hedge([5.0, 0.0, 0.0], [3.6, 0.0, 0.0], 1.0);
         assert!(

@@ -289,6 +289,7 @@ impl<const C: usize> Mrac<C> {
         let mut verdict = None;
         if self.adaptive_on && adapt {
             let rates = Rates {
+                bias_learning_rate: a.bias_learning_rate,
                 learning_rate: a.learning_rate,
                 e_modification: a.e_modification,
                 dt,

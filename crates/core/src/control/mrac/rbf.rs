@@ -121,10 +121,12 @@ impl<const C: usize> RbfNetwork<C> {
     /// with a plus sign; Narendra and Annaswamy's law (its ref. 16) subtracts it, which is what
     /// pulls the weights back, and the Lyapunov argument needs that sign with `nu_ad` entering
     /// the error dynamics as in eq. 10.
+    /// `Gamma` is diagonal: the bias weight has its own rate (see [`Rates`]).
     pub fn learn(&mut self, ch: usize, basis: &Basis<C>, e_pb: f32, e_norm: f32, rates: Rates) {
         let leak = rates.e_modification * e_norm;
+        let gb = rates.bias_learning_rate * rates.dt;
+        self.bias[ch] -= gb * (e_pb + leak * self.bias[ch]);
         let g = rates.learning_rate * rates.dt;
-        self.bias[ch] -= g * (e_pb + leak * self.bias[ch]);
         for (w, x) in self.linear.iter_mut().zip(&basis.linear) {
             w[ch] -= g * (x * e_pb + leak * w[ch]);
         }
@@ -182,6 +184,9 @@ impl<const C: usize> RbfNetwork<C> {
 /// The constants of one learning step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Rates {
+    /// `Gamma` for the bias weight.
+    pub bias_learning_rate: f32,
+    /// `Gamma` for the linear and Gaussian weights.
     pub learning_rate: f32,
     pub e_modification: f32,
     pub dt: f32,
@@ -224,6 +229,7 @@ mod tests {
         let mut n = RbfNetwork::<8>::new();
         let b = basis(&n, [0.3, 0.0, 0.0]);
         let rates = Rates {
+            bias_learning_rate: 10.0,
             learning_rate: 10.0,
             e_modification: 0.0,
             dt: 0.01,
