@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The adaptive controller's targets, measured on the `track` scenario (hall, UTM-30LX: at 1 m/s
 # the XV-11's keyframe odometry loses the lidar on the square, whoever flies):
-#  1. tracking: PID against MRAC on the square, nominal and under mass +30 % with motor 1 at
-#     80 % (calm: no gusts, no people), TRACK_SEEDS seeds each;
+#  1. tracking: PID against MRAC on the square, nominal, mass +30 %, motor 1 at 80 % and both
+#     (calm: no gusts, no people), TRACK_SEEDS seeds each;
 #  2. robustness: MRAC over ROBUST_SEEDS seeds for each model error, with
 #     the hall's person walking and the default gusts: crashes, runs that never reached Hold,
 #     adaptive fallbacks and the largest adaptive weight norm.
@@ -41,6 +41,8 @@ plan() {
 
 {
   plan "$track_seeds" "pid mrac" nominal --no-gusts --no-people
+  plan "$track_seeds" "pid mrac" heavy --no-gusts --no-people --mass-scale 1.3
+  plan "$track_seeds" "pid mrac" weak --no-gusts --no-people --weak-motor 1,0.8
   plan "$track_seeds" "pid mrac" heavy-weak --no-gusts --no-people --mass-scale 1.3 --weak-motor 1,0.8
   plan "$robust_seeds" mrac mass --mass-scale 1.3
   plan "$robust_seeds" mrac motor --weak-motor 1,0.8
@@ -67,7 +69,7 @@ def stats(name, controller):
 
 print("tracking (square, calm)")
 print("error\tcontroller\truns\tflew_track\tmean_rms_track_m\tmedian_rms_track_m\tmean_max_track_m")
-for name in ["nominal", "heavy-weak"]:
+for name in ["nominal", "heavy", "weak", "heavy-weak"]:
     for controller in ["pid", "mrac"]:
         rs, ok, track = stats(name, controller)
         maxes = [r["max_track_error_m"] for r in ok if r["max_track_error_m"] is not None]
