@@ -28,7 +28,9 @@ pub mod onboard;
 pub mod score;
 pub mod survey;
 
-pub use flight::{fly, Controller, Entry, Flight, Options, Report, ScenarioError, Tuning};
+pub use flight::{
+    fly, Controller, Entry, Flight, Gains, Options, Report, ScenarioError, Tuning, GAIN_RANGES,
+};
 
 /// Every scenario, as named on the command line.
 pub static CATALOGUE: [Entry; 5] = [

@@ -2,12 +2,12 @@
 //! for the vehicle and the lidar (through [`OnboardLink`]), the PID tuning and matcher options,
 //! the run length and the pilot who arms it.
 
-use super::flight::{Controller, Flight, Options, ScenarioError, Tuning};
+use super::flight::{Controller, Flight, Gains, Options, ScenarioError, Tuning};
 use crate::disturb::Push;
 use crate::runner::onboard_link::{
     autopilot_for, OnboardLink, Script, LARGE_SCAN_BEAMS, XV11_BEAMS,
 };
-use crate::runner::{Pilot, SimConfig};
+use crate::runner::{Pilot, SetupError, SimConfig};
 use plumbline_core::control::cascade::CascadeConfig;
 use plumbline_core::matching::OdometryConfig;
 
@@ -55,6 +55,7 @@ pub(super) fn flight(
             ..CascadeConfig::soft()
         };
     }
+    apply_gains(&mut autopilot.cascade, &options.gains)?;
     let (pilot, log) = if config.lidar.beams <= XV11_BEAMS {
         let (link, log) =
             OnboardLink::<XV11_BEAMS>::new(&config.lidar, odometry, autopilot, script)
@@ -67,4 +68,18 @@ pub(super) fn flight(
         (Pilot::Onboard(Box::new(link)), log)
     };
     Ok(Flight::onboard(pilot, log, push, config))
+}
+
+/// Replaces the cascade's outer-loop gains and command filter with those `gains` sets.
+fn apply_gains(cascade: &mut CascadeConfig, gains: &Gains) -> Result<(), ScenarioError> {
+    gains
+        .check()
+        .map_err(|e| ScenarioError::Setup(SetupError::Config(e)))?;
+    let xy = &mut cascade.position_xy;
+    xy.kp = gains.position_kp.unwrap_or(xy.kp);
+    let v = &mut cascade.velocity_xy;
+    v.kp = gains.velocity_kp.unwrap_or(v.kp);
+    v.ki = gains.velocity_ki.unwrap_or(v.ki);
+    cascade.command_tau_s = gains.command_tau_s.unwrap_or(cascade.command_tau_s);
+    Ok(())
 }
