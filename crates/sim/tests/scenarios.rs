@@ -59,18 +59,25 @@ fn controllers_a_scenario_cannot_fly_are_refused_with_the_one_that_can() {
         }
     };
     assert_eq!(refused("survey", Controller::Pid), None);
-    assert_eq!(refused("hold", Controller::Mrac), Some(Controller::Pid));
+    assert_eq!(refused("survey", Controller::Mrac), None);
     assert_eq!(
         refused("lidar-failure", Controller::TestPilot),
         Some(Controller::Pid)
     );
-    // The test pilot may hover for sensor logs.
-    let options = Options {
-        controller: Some(Controller::TestPilot),
-        ..Options::default()
-    };
-    assert!(scenario::find("hold")
-        .unwrap()
-        .prepare(&options, &mut room())
-        .is_ok());
+    // The test pilot may hover for sensor logs; both onboard controllers fly every onboard
+    // scenario.
+    for (name, controller) in [
+        ("hold", Controller::TestPilot),
+        ("hold", Controller::Mrac),
+        ("hold-people", Controller::Mrac),
+        ("land-on-low-battery", Controller::Mrac),
+        ("lidar-failure", Controller::Mrac),
+    ] {
+        let options = Options {
+            controller: Some(controller),
+            ..Options::default()
+        };
+        let prepared = scenario::find(name).unwrap().prepare(&options, &mut room());
+        assert!(prepared.is_ok(), "{name} {controller:?}");
+    }
 }

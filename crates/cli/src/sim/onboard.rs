@@ -20,7 +20,8 @@ use std::path::Path;
 #[derive(Args, Debug)]
 pub struct ClosedLoopArgs {
     /// Who flies: `pid` (the onboard cascade; default for the closed-loop scenarios), `mrac`
-    /// (not implemented yet) or `test-pilot` (the simulator's ground-truth pilot: `survey`,
+    /// (the same cascade with model-reference adaptive control in place of its position and
+    /// velocity loops) or `test-pilot` (the simulator's ground-truth pilot: `survey`,
     /// and `hold` as a sensor-log generator).
     #[arg(long, value_parser = ["pid", "mrac", "test-pilot"])]
     pub controller: Option<String>,

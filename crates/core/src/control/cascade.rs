@@ -9,11 +9,14 @@
 //! integral; the collective comes from the vertical loops and is tilt-compensated.
 //! Attitude errors are taken on Euler angles, which is adequate within the tilt limit.
 
+use super::inversion;
 use super::mixer::Demand;
+use super::mrac::{
+    Command, FallbackReason, Mrac, MracConfig, MracConfigError, MracError, AUTOPILOT_CENTRES,
+};
 use super::pid::{Pid, PidConfig, PidError};
 use crate::geom::normalize_angle;
-use crate::msgs::{EstimatedState, GRAVITY_M_S2};
-use libm::{atanf, cosf, sqrtf};
+use crate::msgs::EstimatedState;
 
 /// Gains and limits of the whole cascade. Defaults suit the simulator's "pelican" vehicle (1 kg,
 /// 0.21 m arms, 7 N rotors); for another vehicle set `effectiveness_rad_s2` and
@@ -177,12 +180,17 @@ pub struct AttitudeTarget {
     pub lift_m_s2: f32,
 }
 
-/// The state of all twelve loops.
+/// The state of all twelve loops, and of the MRAC when it flies the outer loops instead.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cascade {
     pub config: CascadeConfig,
     position: [Pid; 3],
     velocity: [Pid; 3],
+    /// When set, the MRAC replaces the position and velocity PIDs; the inversion, attitude
+    /// and rate loops are the same for both.
+    mrac: Option<Mrac<AUTOPILOT_CENTRES>>,
+    /// Whether the vehicle was airborne at the last actuation: the MRAC learns only then.
+    airborne: bool,
     attitude: [Pid; 3],
     rate: [Pid; 3],
     /// The velocity loop's last output, held between runs of the outer loops; `None` makes
@@ -220,9 +228,45 @@ impl Cascade {
                 Pid::new(c.rate_rp),
                 Pid::new(c.rate_yaw),
             ],
+            mrac: None,
+            airborne: false,
             held: None,
             outer_elapsed_s: 0.0,
             filtered_tilt_rad: None,
+        }
+    }
+
+    /// The cascade with the MRAC flying the outer loops (`--controller mrac`).
+    pub fn with_mrac(config: CascadeConfig, mrac: MracConfig) -> Result<Self, MracConfigError> {
+        Ok(Self {
+            mrac: Some(Mrac::new(mrac)?),
+            ..Self::new(config)
+        })
+    }
+
+    /// The MRAC, when it flies the outer loops.
+    pub fn mrac(&self) -> Option<&Mrac<AUTOPILOT_CENTRES>> {
+        self.mrac.as_ref()
+    }
+
+    /// What the mixer delivered of the last demand, and whether the vehicle is airborne: the
+    /// MRAC's hedge and learning use them (the PID loops do not).
+    pub fn actuated(&mut self, achieved: &Demand, airborne: bool) {
+        self.airborne = airborne;
+        if let Some(m) = &mut self.mrac {
+            m.actuated(achieved.collective);
+        }
+    }
+
+    /// A fallback of the MRAC's adaptive element since the last call.
+    pub fn take_fallback(&mut self) -> Option<FallbackReason> {
+        self.mrac.as_mut().and_then(|m| m.take_fallback())
+    }
+
+    /// Forgets what the MRAC learned (on disarm: the next flight may carry another load).
+    pub fn forget_learning(&mut self) {
+        if let Some(m) = &mut self.mrac {
+            m.forget();
         }
     }
 
@@ -236,6 +280,9 @@ impl Cascade {
             .chain(self.rate.iter_mut())
         {
             pid.reset();
+        }
+        if let Some(m) = &mut self.mrac {
+            m.reset();
         }
         self.held = None;
         self.outer_elapsed_s = 0.0;
@@ -262,9 +309,19 @@ impl Cascade {
                 held
             }
             _ => {
-                let velocity_sp = self.velocity_setpoint(setpoint, state, elapsed)?;
-                let mut target =
-                    self.attitude_target(velocity_sp, setpoint.yaw_rad, state, elapsed, integrate)?;
+                let mut target = match self.adaptive_acceleration(setpoint, state, elapsed)? {
+                    Some(accel) => self.invert(accel, setpoint.yaw_rad, state),
+                    None => {
+                        let velocity_sp = self.velocity_setpoint(setpoint, state, elapsed)?;
+                        self.attitude_target(
+                            velocity_sp,
+                            setpoint.yaw_rad,
+                            state,
+                            elapsed,
+                            integrate,
+                        )?
+                    }
+                };
                 self.filter_tilt(&mut target, elapsed);
                 self.held = Some(target);
                 self.outer_elapsed_s = 0.0;
@@ -291,6 +348,35 @@ impl Cascade {
         };
         self.filtered_tilt_rad = Some(filtered);
         [target.roll_rad, target.pitch_rad] = filtered;
+    }
+
+    /// The MRAC's outer loops: its pseudo-control (world acceleration, m/s^2), which goes
+    /// through the same inversion as the PID's; `None` when the PID loops fly.
+    fn adaptive_acceleration(
+        &mut self,
+        setpoint: &CascadeSetpoint,
+        state: &EstimatedState,
+        dt: f32,
+    ) -> Result<Option<[f32; 3]>, PidError> {
+        let hover = self.config.hover_collective;
+        let airborne = self.airborne;
+        let Some(mrac) = &mut self.mrac else {
+            return Ok(None);
+        };
+        let [x, y] = match setpoint.horizontal_m {
+            Some([x, y]) => [Command::Position(x), Command::Position(y)],
+            None => [Command::Off; 2],
+        };
+        let z = match setpoint.vertical {
+            Vertical::Height(h) => Command::Position(h),
+            Vertical::ClimbRate(rate) => Command::Velocity(rate),
+        };
+        mrac.step([x, y, z], state, hover, dt, airborne)
+            .map_err(|e| match e {
+                MracError::NonFinite => PidError::NonFinite,
+                MracError::BadDt => PidError::BadDt,
+            })
+            .map(Some)
     }
 
     /// Position loop: world velocity setpoint (m/s).
@@ -337,7 +423,6 @@ impl Cascade {
         dt: f32,
         integrate: bool,
     ) -> Result<AttitudeTarget, PidError> {
-        let c = &self.config;
         let mut accel = [0.0; 3];
         match velocity_sp.horizontal_m_s {
             Some(target) => {
@@ -354,37 +439,33 @@ impl Cascade {
         }
         let vz = state.velocity_m_s[2];
         accel[2] = self.velocity[2].update(velocity_sp.climb_m_s, vz, 0.0, dt, integrate)?;
-        // Vertical: never ask for less than 30 % of gravity, so the vehicle stays upright.
-        let lift = (GRAVITY_M_S2 + accel[2]).max(0.3 * GRAVITY_M_S2);
-        // Horizontal demand rotated into the heading frame, bounded by the tilt limit.
-        let (s, co) = libm::sincosf(state.yaw_rad);
-        let mut ax = co * accel[0] + s * accel[1];
-        let mut ay = -s * accel[0] + co * accel[1];
-        let max_h = lift * libm::tanf(c.max_tilt_rad);
-        let h = sqrtf(ax * ax + ay * ay);
-        if h > max_h {
-            ax *= max_h / h;
-            ay *= max_h / h;
-        }
-        // ZYX Euler, FLU: thrust along body z tilts to (cos(phi) sin(theta), -sin(phi)).
-        // cos(pitch) = lift / sqrt(lift^2 + ax^2), so roll needs no cosine of its own.
-        let pitch = atanf(ax / lift);
-        let roll = atanf(-ay / sqrtf(lift * lift + ax * ax));
-        Ok(AttitudeTarget {
-            roll_rad: roll,
-            pitch_rad: pitch,
+        Ok(self.invert(accel, yaw_sp, state))
+    }
+
+    /// The approximate inversion ([`inversion`]): world acceleration to tilt, lift and the
+    /// collective at the estimated tilt.
+    fn invert(&self, accel_m_s2: [f32; 3], yaw_sp: f32, state: &EstimatedState) -> AttitudeTarget {
+        let tilt = inversion::tilt_for(accel_m_s2, state.yaw_rad, self.config.max_tilt_rad);
+        AttitudeTarget {
+            roll_rad: tilt.roll_rad,
+            pitch_rad: tilt.pitch_rad,
             yaw_rad: yaw_sp,
-            collective: self.collective(lift, state),
-            lift_m_s2: lift,
-        })
+            collective: self.collective(tilt.lift_m_s2, state),
+            lift_m_s2: tilt.lift_m_s2,
+        }
     }
 
     /// The collective that gives `lift_m_s2` of vertical specific force at the estimated tilt.
     fn collective(&self, lift_m_s2: f32, state: &EstimatedState) -> f32 {
         let c = &self.config;
-        let tilt = cosf(state.roll_rad) * cosf(state.pitch_rad);
-        let collective = c.hover_collective * lift_m_s2 / GRAVITY_M_S2 / tilt.max(0.5);
-        collective.clamp(c.min_collective, c.max_collective)
+        inversion::collective_for(
+            lift_m_s2,
+            state.roll_rad,
+            state.pitch_rad,
+            c.hover_collective,
+            c.min_collective,
+            c.max_collective,
+        )
     }
 
     /// Attitude loop: body rate setpoint (rad/s); heading error wraps to (-pi, pi].
@@ -438,7 +519,8 @@ impl Cascade {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use libm::sinf;
+    use crate::msgs::GRAVITY_M_S2;
+    use libm::{cosf, sinf};
 
     fn level_at(position_m: [f32; 3]) -> EstimatedState {
         EstimatedState {

@@ -6,11 +6,12 @@
 //! input is counted in [`FaultCounters`] and the step degrades (damped, level, or stopped) with
 //! finite motor commands.
 
-use super::events::EventLog;
+use super::events::{EventKind, EventLog};
 use super::supervisor::{Status, Supervisor, SupervisorConfig, EVENT_LOG_LEN};
 use crate::control::airframe::Airframe;
 use crate::control::cascade::{Cascade, CascadeConfig, CascadeSetpoint, Vertical};
 use crate::control::mixer::{Demand, Mixer};
+use crate::control::mrac::{FallbackReason, Mrac, MracConfig, AUTOPILOT_CENTRES};
 use crate::control::sas::{self, SasConfig};
 use crate::estimate::ekf::Outcome;
 use crate::estimate::estimator::{Estimator, EstimatorConfig, EstimatorCounters, Situation};
@@ -25,7 +26,11 @@ use crate::msgs::{
 pub struct AutopilotConfig {
     pub frame: FrameKind,
     pub estimator: EstimatorConfig,
+    /// Which law flies the position and velocity loops of the cascade.
+    pub controller: ControllerKind,
     pub cascade: CascadeConfig,
+    /// Used when `controller` is [`ControllerKind::Mrac`].
+    pub mrac: MracConfig,
     pub sas: SasConfig,
     pub supervisor: SupervisorConfig,
     pub landing: LandingConfig,
@@ -42,6 +47,18 @@ impl AutopilotConfig {
         c.cascade.effectiveness_rad_s2 = airframe.effectiveness_rad_s2();
         c
     }
+}
+
+/// The law that turns position commands into the acceleration the cascade's inversion flies:
+/// the only part of the loop that differs between the two.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ControllerKind {
+    /// Position and velocity PIDs (seed 000 Fig. 8-9).
+    #[default]
+    Pid,
+    /// Model-reference adaptive control with an RBF network and pseudo-control hedging
+    /// (seed 002 eqs. 7-12).
+    Mrac,
 }
 
 /// Descent rates and the on-ground test.
@@ -77,7 +94,7 @@ impl Default for LandingConfig {
 }
 
 /// Faults the autopilot survived, by kind.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FaultCounters {
     /// Steps with a non-finite, non-positive or too long `dt`.
     pub bad_dt: u32,
@@ -89,6 +106,8 @@ pub struct FaultCounters {
     pub control_errors: u32,
     /// Steps where the mixer had to cut the request to fit the motors.
     pub mixer_saturated: u32,
+    /// Time the mixer spent cutting requests, s (`mixer_saturated` in seconds).
+    pub saturated_s: f64,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -109,12 +128,26 @@ pub struct Autopilot {
 }
 
 impl Autopilot {
+    /// The autopilot for `config`. An MRAC configuration that fails its validation is not
+    /// flown: the PID cascade flies instead and the event log starts with
+    /// [`FallbackReason::InvalidConfig`] (check [`MracConfig::validate`] first to refuse it).
     pub fn new(config: AutopilotConfig) -> Self {
+        let mut supervisor = Supervisor::new(config.supervisor);
+        let cascade = match config.controller {
+            ControllerKind::Pid => Cascade::new(config.cascade),
+            ControllerKind::Mrac => {
+                Cascade::with_mrac(config.cascade, config.mrac).unwrap_or_else(|_| {
+                    let reason = FallbackReason::InvalidConfig;
+                    supervisor.record(0.0, EventKind::AdaptiveFallback(reason));
+                    Cascade::new(config.cascade)
+                })
+            }
+        };
         Self {
             config,
             estimator: Estimator::new(config.estimator),
-            supervisor: Supervisor::new(config.supervisor),
-            cascade: Cascade::new(config.cascade),
+            supervisor,
+            cascade,
             mixer: Mixer::new(config.frame),
             home: PositionSetpoint::default(),
             mode: FlightMode::Disarmed,
@@ -140,6 +173,11 @@ impl Autopilot {
 
     pub fn events(&self) -> &EventLog<EVENT_LOG_LEN> {
         self.supervisor.events()
+    }
+
+    /// The MRAC flying the outer loops, if it does (its weight norm, hedge and fallback).
+    pub fn mrac(&self) -> Option<&Mrac<AUTOPILOT_CENTRES>> {
+        self.cascade.mrac()
     }
 
     /// One pass of the onboard loop.
@@ -216,13 +254,18 @@ impl Autopilot {
             (FlightMode::Manual, _) => Some(self.manual(&pilot, rates)),
             (_, Some(sp)) => {
                 let integrate = airborne && !self.saturated;
-                match self.cascade.run(&sp, &estimate, rates, dt, integrate) {
-                    Ok(d) => Some(d),
+                let demand = match self.cascade.run(&sp, &estimate, rates, dt, integrate) {
+                    Ok(d) => d,
                     Err(_) => {
                         self.faults.control_errors = self.faults.control_errors.saturating_add(1);
-                        Some(self.damped_hover(rates))
+                        self.damped_hover(rates)
                     }
+                };
+                if let Some(reason) = self.cascade.take_fallback() {
+                    let event = EventKind::AdaptiveFallback(reason);
+                    self.supervisor.record(inputs.t_s, event);
                 }
+                Some(demand)
             }
             (_, None) => Some(self.damped_hover(rates)),
         };
@@ -236,7 +279,9 @@ impl Autopilot {
                 self.saturated = mixed.saturated;
                 if mixed.saturated {
                     self.faults.mixer_saturated = self.faults.mixer_saturated.saturating_add(1);
+                    self.faults.saturated_s += f64::from(dt);
                 }
+                self.cascade.actuated(&mixed.achieved, airborne);
                 mixed.motors
             }
             None => MotorCommands::STOPPED,
@@ -266,7 +311,10 @@ impl Autopilot {
                 }
                 self.home.position_m[2] = self.config.supervisor.takeoff_height_m;
             }
-            FlightMode::Disarmed | FlightMode::Killed => self.saturated = false,
+            FlightMode::Disarmed | FlightMode::Killed => {
+                self.saturated = false;
+                self.cascade.forget_learning();
+            }
             FlightMode::Land | FlightMode::Manual => {}
         }
         self.cascade.reset();

@@ -1,13 +1,20 @@
-//! A fixed-size log of mode changes and failsafes, so a flight can be explained afterwards
+//! A fixed-size log of mode changes, failsafes and controller fallbacks, so a flight can be explained afterwards
 //! without a heap: the newest `N` events are kept and the number dropped is counted.
 
+use crate::control::mrac::FallbackReason;
 use crate::msgs::{FailsafeReason, FlightMode};
 
 /// What happened.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EventKind {
-    ModeChange { from: FlightMode, to: FlightMode },
+    ModeChange {
+        from: FlightMode,
+        to: FlightMode,
+    },
     Failsafe(FailsafeReason),
+    /// The MRAC's adaptive element was switched off (weights reset, baseline flying), or the
+    /// MRAC could not be configured and the PID cascade flies.
+    AdaptiveFallback(FallbackReason),
 }
 
 /// One logged event and when it happened (the step's `t_s`).

@@ -122,6 +122,12 @@ impl Supervisor {
         &self.events
     }
 
+    /// Logs what another part of the autopilot reports (the controller's fallbacks), beside
+    /// the mode changes and failsafes.
+    pub fn record(&mut self, t_s: f64, kind: EventKind) {
+        self.events.push(t_s, kind);
+    }
+
     /// One decision. Returns the mode to fly this step.
     pub fn update(&mut self, s: &Status) -> FlightMode {
         // SAFETY-CRITICAL: the kill switch wins over every other input and every mode.
@@ -384,7 +390,7 @@ mod tests {
         let modes: [FlightMode; 4] = {
             let mut it = s.sup.events().iter().map(|e| match e.kind {
                 EventKind::ModeChange { to, .. } => to,
-                EventKind::Failsafe(_) => FlightMode::Killed,
+                EventKind::Failsafe(_) | EventKind::AdaptiveFallback(_) => FlightMode::Killed,
             });
             core::array::from_fn(|_| it.next().unwrap())
         };

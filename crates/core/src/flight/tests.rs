@@ -310,5 +310,6 @@ fn manual_flight_is_rate_damped_and_follows_the_sticks() {
 fn autopilot_size_is_small_and_known() {
     let size = core::mem::size_of::<Autopilot>();
     std::println!("size_of::<Autopilot>() = {size} bytes");
-    assert!(size <= 4096, "{size}");
+    // The MRAC's state (about 1.4 kB) is part of the cascade whichever controller flies.
+    assert!(size <= 6144, "{size}");
 }

@@ -10,6 +10,7 @@ use crate::runner::{FlightSoftware, SensorFrame, SetupError, STATE_RATE_HZ};
 use crate::sensors::lidar::{LidarProfile, LidarScan};
 use crate::vehicle::{Frame, VehicleParams};
 use plumbline_core::control::airframe::Airframe;
+use plumbline_core::control::mrac::FallbackReason;
 use plumbline_core::flight::autopilot::AutopilotConfig;
 use plumbline_core::flight::onboard::Onboard;
 use plumbline_core::matching::OdometryConfig;
@@ -102,6 +103,13 @@ pub struct FlightLog {
     pub samples: Vec<OnboardSample>,
     /// Scan points the matcher's dynamic-object test rejected (seed 000 sec. 4.2).
     pub rejected_points: u64,
+    /// Time the mixer had to cut the controller's request to fit the motors, s.
+    pub saturation_s: f64,
+    /// The MRAC's adaptive weight norm at the end and at its largest (`None` with the PID).
+    pub adaptive_weight_norm: Option<f64>,
+    pub max_adaptive_weight_norm: Option<f64>,
+    /// When and why the MRAC's adaptive element first fell back to the baseline, if it did.
+    pub adaptive_fallback: Option<(f64, FallbackReason)>,
     /// Sum over Hold steps and motors of the squared rate of change of the command, 1/s^2.
     jitter_sum: f64,
     jitter_terms: u64,
@@ -226,6 +234,17 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
         log.failsafe = out.failsafe.or(log.failsafe);
         log.last_estimate = out.estimate;
         log.rejected_points = self.onboard.rejected_points();
+        let autopilot = self.onboard.autopilot();
+        log.saturation_s = autopilot.faults().saturated_s;
+        if let Some(mrac) = autopilot.mrac() {
+            let norm = f64::from(mrac.weight_norm());
+            log.adaptive_weight_norm = Some(norm);
+            log.max_adaptive_weight_norm =
+                Some(log.max_adaptive_weight_norm.map_or(norm, |m| m.max(norm)));
+            if log.adaptive_fallback.is_none() {
+                log.adaptive_fallback = mrac.fallback().map(|r| (frame.t_s, r));
+            }
+        }
         log.record(dt_s, out.mode, out.motors.throttle_norm);
         if frame.t_s >= self.next_sample_s {
             self.next_sample_s = frame.t_s + 1.0 / STATE_RATE_HZ;

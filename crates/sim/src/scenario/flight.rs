@@ -25,7 +25,8 @@ pub struct Entry {
 pub enum Controller {
     /// The onboard cascade of PID loops.
     Pid,
-    /// Model-reference adaptive control with pseudo-control hedging (not implemented yet).
+    /// The onboard cascade with model-reference adaptive control (an RBF network with
+    /// e-modification and pseudo-control hedging) in place of its position and velocity PIDs.
     Mrac,
     /// The simulator's ground-truth pilot.
     TestPilot,
@@ -209,14 +210,6 @@ impl Entry {
         options: &Options,
         config: &mut SimConfig,
     ) -> Result<Flight, ScenarioError> {
-        if options.controller == Some(Controller::Mrac) {
-            return Err(ScenarioError::Controller {
-                scenario: self.name,
-                controller: Controller::Mrac,
-                reason: "mrac is not implemented yet (MRAC with PCH is planned)",
-                instead: Some(Controller::Pid),
-            });
-        }
         let flight = (self.prepare)(options, config)?;
         for p in &config.world.path {
             config

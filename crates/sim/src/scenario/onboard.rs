@@ -1,6 +1,6 @@
 //! What every scenario flown by the onboard stack shares: the stack of `plumbline-core` built
-//! for the vehicle and the lidar (through [`OnboardLink`]), the PID tuning and matcher options,
-//! the run length and the pilot who arms it.
+//! for the vehicle and the lidar (through [`OnboardLink`]), the controller (PID or MRAC) and its
+//! tuning, the matcher options, the run length and the pilot who arms it.
 
 use super::flight::{Controller, Flight, Gains, Options, ScenarioError, Tuning};
 use crate::disturb::Push;
@@ -9,6 +9,7 @@ use crate::runner::onboard_link::{
 };
 use crate::runner::{Pilot, SetupError, SimConfig};
 use plumbline_core::control::cascade::CascadeConfig;
+use plumbline_core::flight::autopilot::{AutopilotConfig, ControllerKind};
 use plumbline_core::matching::OdometryConfig;
 
 /// The arm switch goes on here: the first half second lets the filter settle on the ground, s.
@@ -16,14 +17,17 @@ pub const ARM_AT_S: f64 = 0.5;
 /// Run length when the options give none, s.
 const DEFAULT_DURATION_S: f64 = 60.0;
 
-/// Refuses controllers other than the onboard PID stack for `scenario`, and sets the run
-/// length. The world's people stay out unless the scenario asks for them afterwards.
+/// Refuses controllers other than the onboard stack's (PID or MRAC) for `scenario`, and sets
+/// the run length. The world's people stay out unless the scenario asks for them afterwards.
 pub(super) fn setup(
     scenario: &'static str,
     options: &Options,
     config: &mut SimConfig,
 ) -> Result<(), ScenarioError> {
-    if let Some(c) = options.controller.filter(|c| *c != Controller::Pid) {
+    if let Some(c) = options
+        .controller
+        .filter(|c| !matches!(c, Controller::Pid | Controller::Mrac))
+    {
         return Err(ScenarioError::Controller {
             scenario,
             controller: c,
@@ -55,7 +59,14 @@ pub(super) fn flight(
             ..CascadeConfig::soft()
         };
     }
-    apply_gains(&mut autopilot.cascade, &options.gains)?;
+    if options.controller == Some(Controller::Mrac) {
+        autopilot.controller = ControllerKind::Mrac;
+        autopilot
+            .mrac
+            .validate()
+            .map_err(|e| ScenarioError::Setup(SetupError::Config(e.to_string())))?;
+    }
+    apply_gains(&mut autopilot, &options.gains)?;
     let (pilot, log) = if config.lidar.beams <= XV11_BEAMS {
         let (link, log) =
             OnboardLink::<XV11_BEAMS>::new(&config.lidar, odometry, autopilot, script)
@@ -70,16 +81,33 @@ pub(super) fn flight(
     Ok(Flight::onboard(pilot, log, push, config))
 }
 
-/// Replaces the cascade's outer-loop gains and command filter with those `gains` sets.
-fn apply_gains(cascade: &mut CascadeConfig, gains: &Gains) -> Result<(), ScenarioError> {
-    gains
-        .check()
-        .map_err(|e| ScenarioError::Setup(SetupError::Config(e)))?;
-    let xy = &mut cascade.position_xy;
-    xy.kp = gains.position_kp.unwrap_or(xy.kp);
-    let v = &mut cascade.velocity_xy;
+/// Replaces the outer-loop gains of the controller that flies, and the command filter, with
+/// those `gains` sets. The MRAC takes them as its reference model's (the PID's loop gains) and
+/// its PD on the model's error in the same stiffness (`kp = position x velocity`, `kd =
+/// velocity`, as its defaults relate to the PID's); it has no velocity integral to set.
+fn apply_gains(autopilot: &mut AutopilotConfig, gains: &Gains) -> Result<(), ScenarioError> {
+    let refuse = |e: String| ScenarioError::Setup(SetupError::Config(e));
+    gains.check().map_err(refuse)?;
+    let c = &mut autopilot.cascade;
+    c.command_tau_s = gains.command_tau_s.unwrap_or(c.command_tau_s);
+    if autopilot.controller == ControllerKind::Mrac {
+        if gains.velocity_ki.is_some() {
+            return Err(refuse(
+                "velocity_ki sets the PID's velocity integral; the mrac has none".into(),
+            ));
+        }
+        let (r, pd) = (&mut autopilot.mrac.reference_xy, &mut autopilot.mrac.pd_xy);
+        r.position_gain_per_s = gains.position_kp.unwrap_or(r.position_gain_per_s);
+        r.velocity_gain_per_s = gains.velocity_kp.unwrap_or(r.velocity_gain_per_s);
+        if gains.position_kp.is_some() || gains.velocity_kp.is_some() {
+            pd.kp_per_s2 = r.position_gain_per_s * r.velocity_gain_per_s;
+            pd.kd_per_s = r.velocity_gain_per_s;
+        }
+        return autopilot.mrac.validate().map_err(|e| refuse(e.to_string()));
+    }
+    c.position_xy.kp = gains.position_kp.unwrap_or(c.position_xy.kp);
+    let v = &mut c.velocity_xy;
     v.kp = gains.velocity_kp.unwrap_or(v.kp);
     v.ki = gains.velocity_ki.unwrap_or(v.ki);
-    cascade.command_tau_s = gains.command_tau_s.unwrap_or(cascade.command_tau_s);
     Ok(())
 }

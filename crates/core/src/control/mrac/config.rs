@@ -1,0 +1,243 @@
+//! The MRAC's parameters, each named with its unit, their defaults and why, and the checks that
+//! reject a configuration the controller cannot fly.
+
+use core::fmt;
+
+/// The second-order reference model of one channel (seed 002 eq. 8): position error to a
+/// velocity target, velocity error to an acceleration, each bounded. Near the command it is the
+/// linear model `a = k_v (k_p (r - x) - v)`: natural frequency `sqrt(k_p k_v)`, damping
+/// `sqrt(k_v / k_p) / 2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReferenceConfig {
+    /// Position error (m) to velocity target (m/s), 1/s.
+    pub position_gain_per_s: f32,
+    /// Velocity error (m/s) to acceleration (m/s^2), 1/s.
+    pub velocity_gain_per_s: f32,
+    /// Largest speed the model asks for, m/s.
+    pub max_speed_m_s: f32,
+    /// Largest acceleration the model asks for, m/s^2.
+    pub max_accel_m_s2: f32,
+}
+
+/// The linear feedback on the reference model's tracking error (seed 002 eq. 9, `nu_pd = K e`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PdGains {
+    /// Position error (m) to acceleration (m/s^2), 1/s^2.
+    pub kp_per_s2: f32,
+    /// Velocity error (m/s) to acceleration (m/s^2), 1/s.
+    pub kd_per_s: f32,
+}
+
+/// The adaptive element: an RBF network with bias and linear terms (seed 002 eq. 11) trained
+/// by the e-modified law of eq. 12, with its weights kept inside a ball.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptiveConfig {
+    /// False flies the baseline alone: reference model, PD and feed-forward.
+    pub enabled: bool,
+    /// Learning rate `Gamma_W` (the same for every weight): weight change in m/s^2 per second,
+    /// per unit of basis output and per unit of `e^T P B` (with `P` from `Q = I` in SI units).
+    pub learning_rate: f32,
+    /// e-modification gain `kappa` (Narendra and Annaswamy, seed 002 ref. 16), per unit of
+    /// `|e|` (m and m/s together): the pull of the weights back towards zero.
+    pub e_modification: f32,
+    /// Width of the Gaussian bases in normalised input units (inputs are scaled to about
+    /// [-1, 1]; centres fill that cube).
+    pub rbf_width: f32,
+    /// Speed that normalises the velocity inputs, m/s.
+    pub velocity_scale_m_s: f32,
+    /// Acceleration that normalises the reference-model acceleration inputs, m/s^2.
+    pub accel_scale_m_s2: f32,
+    /// Bound on each channel's weight vector norm (m/s^2 per unit basis): the update is
+    /// projected back onto this ball.
+    pub weight_bound: f32,
+}
+
+/// When the adaptive element counts as misbehaving and is switched off (weights reset, baseline
+/// flies on). A non-finite weight or output always counts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FallbackConfig {
+    /// Longest time a channel's weights may sit on `weight_bound` without a break, s.
+    pub max_pinned_s: f32,
+    /// A hedge larger than this is "saturated", m/s^2.
+    pub hedge_threshold_m_s2: f32,
+    /// Longest uninterrupted saturated hedge, s.
+    pub max_hedged_s: f32,
+}
+
+/// Everything the MRAC is configured with. The three channels are world x, y (horizontal, one
+/// set of gains) and z (vertical).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MracConfig {
+    pub reference_xy: ReferenceConfig,
+    pub reference_z: ReferenceConfig,
+    pub pd_xy: PdGains,
+    pub pd_z: PdGains,
+    pub adaptive: AdaptiveConfig,
+    pub fallback: FallbackConfig,
+}
+
+impl Default for MracConfig {
+    /// The baseline matches the PID cascade's default stiffness, so the two differ only by
+    /// what MRAC adds (smooth reference, feed-forward, adaptation): the PID's position gain
+    /// (1.5/s) and velocity gain (4/s) are the reference model's, and in error terms the PID
+    /// flies `a = 4 (1.5 e_p - v)`, i.e. `kp = 6/s^2, kd = 4/s` (natural frequency 2.4 rad/s,
+    /// damping 0.8). Speed and acceleration bounds are the PID's output limits.
+    fn default() -> Self {
+        Self {
+            reference_xy: ReferenceConfig {
+                position_gain_per_s: 1.5,
+                velocity_gain_per_s: 4.0,
+                max_speed_m_s: 1.0,
+                max_accel_m_s2: 4.0,
+            },
+            reference_z: ReferenceConfig {
+                position_gain_per_s: 1.5,
+                velocity_gain_per_s: 4.0,
+                max_speed_m_s: 0.8,
+                max_accel_m_s2: 5.0,
+            },
+            pd_xy: PdGains {
+                kp_per_s2: 6.0,
+                kd_per_s: 4.0,
+            },
+            pd_z: PdGains {
+                kp_per_s2: 6.0,
+                kd_per_s: 4.0,
+            },
+            adaptive: AdaptiveConfig {
+                enabled: true,
+                // With kp = 6, kd = 4 the bias weight integrates about 3 x (velocity error
+                // + 0.57 x position error): three times the PID's vertical integral gain,
+                // which learns a 30 % mass error in about a second without ringing.
+                learning_rate: 20.0,
+                // The weights settle where kappa |W| balances P B (0.08 s^2 for position
+                // errors): kappa = 0.01 lets them reach about 8 m/s^2, beyond the bound, so
+                // the leak only acts on weights the error no longer supports.
+                e_modification: 0.01,
+                rbf_width: 0.6,
+                velocity_scale_m_s: 1.0,
+                accel_scale_m_s2: 4.0,
+                // 0.6 g: a 30 % heavier vehicle with a motor at 80 % needs about 2.6 m/s^2.
+                weight_bound: 6.0,
+            },
+            fallback: FallbackConfig {
+                max_pinned_s: 2.0,
+                // Half the tilt-limited horizontal authority (about 3.6 m/s^2).
+                hedge_threshold_m_s2: 2.0,
+                max_hedged_s: 3.0,
+            },
+        }
+    }
+}
+
+/// A parameter the controller cannot fly with: which one and what it must be.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MracConfigError {
+    pub field: &'static str,
+    pub expected: &'static str,
+}
+
+impl fmt::Display for MracConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "mrac parameter {} must be {}", self.field, self.expected)
+    }
+}
+
+fn positive(field: &'static str, v: f32) -> Result<(), MracConfigError> {
+    // A NaN fails the comparison.
+    if v > 0.0 && v < f32::INFINITY {
+        Ok(())
+    } else {
+        Err(MracConfigError {
+            field,
+            expected: "a positive finite number",
+        })
+    }
+}
+
+fn non_negative(field: &'static str, v: f32) -> Result<(), MracConfigError> {
+    if (0.0..f32::INFINITY).contains(&v) {
+        Ok(())
+    } else {
+        Err(MracConfigError {
+            field,
+            expected: "zero or a positive finite number",
+        })
+    }
+}
+
+const REFERENCE_XY_FIELDS: [&str; 4] = [
+    "reference_xy.position_gain_per_s",
+    "reference_xy.velocity_gain_per_s",
+    "reference_xy.max_speed_m_s",
+    "reference_xy.max_accel_m_s2",
+];
+const REFERENCE_Z_FIELDS: [&str; 4] = [
+    "reference_z.position_gain_per_s",
+    "reference_z.velocity_gain_per_s",
+    "reference_z.max_speed_m_s",
+    "reference_z.max_accel_m_s2",
+];
+const PD_XY_FIELDS: [&str; 2] = ["pd_xy.kp_per_s2", "pd_xy.kd_per_s"];
+const PD_Z_FIELDS: [&str; 2] = ["pd_z.kp_per_s2", "pd_z.kd_per_s"];
+
+impl MracConfig {
+    /// Checks every parameter; the first bad one is named.
+    pub fn validate(&self) -> Result<(), MracConfigError> {
+        for (r, names) in [
+            (&self.reference_xy, REFERENCE_XY_FIELDS),
+            (&self.reference_z, REFERENCE_Z_FIELDS),
+        ] {
+            positive(names[0], r.position_gain_per_s)?;
+            positive(names[1], r.velocity_gain_per_s)?;
+            positive(names[2], r.max_speed_m_s)?;
+            positive(names[3], r.max_accel_m_s2)?;
+        }
+        for (pd, names) in [(&self.pd_xy, PD_XY_FIELDS), (&self.pd_z, PD_Z_FIELDS)] {
+            // Both positive: the error dynamics matrix A = [0 1; -kp -kd] is then Hurwitz and
+            // the Lyapunov equation behind eq. 12 has its positive definite solution.
+            positive(names[0], pd.kp_per_s2)?;
+            positive(names[1], pd.kd_per_s)?;
+        }
+        let a = &self.adaptive;
+        non_negative("adaptive.learning_rate", a.learning_rate)?;
+        non_negative("adaptive.e_modification", a.e_modification)?;
+        positive("adaptive.rbf_width", a.rbf_width)?;
+        positive("adaptive.velocity_scale_m_s", a.velocity_scale_m_s)?;
+        positive("adaptive.accel_scale_m_s2", a.accel_scale_m_s2)?;
+        positive("adaptive.weight_bound", a.weight_bound)?;
+        let f = &self.fallback;
+        positive("fallback.max_pinned_s", f.max_pinned_s)?;
+        positive("fallback.hedge_threshold_m_s2", f.hedge_threshold_m_s2)?;
+        positive("fallback.max_hedged_s", f.max_hedged_s)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+
+    #[test]
+    fn defaults_pass_and_each_bad_value_is_named() {
+        assert_eq!(MracConfig::default().validate(), Ok(()));
+        let mut c = MracConfig::default();
+        c.pd_z.kd_per_s = 0.0;
+        assert_eq!(c.validate().unwrap_err().field, "pd_z.kd_per_s");
+        let mut c = MracConfig::default();
+        c.adaptive.rbf_width = f32::NAN;
+        assert_eq!(c.validate().unwrap_err().field, "adaptive.rbf_width");
+        let mut c = MracConfig::default();
+        c.adaptive.learning_rate = -1.0;
+        let e = c.validate().unwrap_err();
+        assert_eq!(e.field, "adaptive.learning_rate");
+        assert!(std::format!("{e}").contains("zero or a positive"));
+        let mut c = MracConfig::default();
+        c.reference_xy.max_speed_m_s = f32::INFINITY;
+        assert_eq!(
+            c.validate().unwrap_err().field,
+            "reference_xy.max_speed_m_s"
+        );
+    }
+}
