@@ -63,8 +63,9 @@ fn a_tiny_energy_sweep_writes_its_table_and_plots_and_reproduces_exactly() {
         (s["settings"].as_u64(), s["flights"].as_u64()),
         (Some(3), Some(3))
     );
-    let error = s["default_rms_hold_error_m"].as_f64().unwrap();
-    let power = s["default_hold_power_w"].as_f64().unwrap();
+    let pid = &s["controllers"]["pid"];
+    let error = pid["default_rms_hold_error_m"].as_f64().unwrap();
+    let power = pid["default_hold_power_w"].as_f64().unwrap();
     assert!(error > 0.0 && error < 0.5, "{s}");
     // The F450 hovers on about 130 W; a hold must be near that, not zero or runaway.
     assert!((100.0..170.0).contains(&power), "{s}");

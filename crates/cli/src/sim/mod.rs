@@ -4,7 +4,7 @@
 
 mod onboard;
 mod outputs;
-mod plot;
+pub(crate) mod plot;
 mod world;
 
 use crate::log_args::LogArgs;

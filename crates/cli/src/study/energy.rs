@@ -304,6 +304,35 @@ pub fn still_hover_w(vehicle: &VehicleParams) -> f64 {
     power(vehicle, &[w; 4], &[0.0; 4]).total_w()
 }
 
+/// One controller's figures against its own default (`rows[0]`), and whether it meets the
+/// question's target.
+fn controller_summary(rows: &[Row], still_hover_w: f64) -> (serde_json::Value, bool) {
+    let points: Vec<Point> = rows.iter().map(|r| r.point).collect();
+    let verdict = pareto::verdict(&points, 0, ERROR_SLACK, ENERGY_SAVING);
+    let d = &rows[0];
+    let total: f64 = d.parts_wh_min.iter().sum();
+    let best = verdict.best_within_slack.map(|i| &rows[i]);
+    let value = json!({
+        "default_rms_hold_error_m": d.point.error_m,
+        "default_hold_energy_wh_per_min": d.point.energy_wh_min,
+        "default_hold_power_w": d.hold_power_w,
+        "default_over_still_hover": d.hold_power_w / still_hover_w - 1.0,
+        "default_power_fraction": d.parts_wh_min.map(|p| p / total),
+        "failed_settings": rows.iter().filter(|r| r.failed > 0).count(),
+        "best_saving_within_10pct_error": verdict.saving_within_slack,
+        "best_setting": best.map(|r| json!({
+            "position_kp": r.setting.gains.position_kp,
+            "velocity_kp": r.setting.gains.velocity_kp,
+            "command_tau_s": r.setting.gains.command_tau_s,
+            "rms_hold_error_m": r.point.error_m,
+            "hold_energy_wh_per_min": r.point.energy_wh_min,
+        })),
+        "largest_saving_any_error": verdict.largest_saving,
+        "target_met": verdict.met,
+    });
+    (value, verdict.met)
+}
+
 fn stage(dir: &Path, name: &str) -> Result<OutputFile, CliError> {
     Ok(OutputFile::stage(&dir.join(name))?)
 }
@@ -328,52 +357,42 @@ pub fn run(args: EnergyArgs) -> CliResult {
         .collect();
     let points: Vec<Point> = rows.iter().map(|r| r.point).collect();
     let front = pareto::front(&points);
-    // The first setting is the first controller's default (see `settings`).
-    let verdict = pareto::verdict(&points, 0, ERROR_SLACK, ENERGY_SAVING);
     let floor_w = still_hover_w(&VehicleParams::f450());
-    let floor = floor_w / 60.0;
-    let power_fraction = |r: &Row| {
-        let total: f64 = r.parts_wh_min.iter().sum();
-        r.parts_wh_min.map(|p| p / total)
-    };
-    let default = rows[0].point;
     output::write(
         &args.out.join("energy.tsv"),
         table(&rows, &front).as_bytes(),
     )?;
-    let best = verdict.best_within_slack.map(|i| &rows[i]);
-    write_png(pareto_png, |p| energy_plot::pareto(p, &rows, &front, floor))?;
+    write_png(pareto_png, |p| {
+        energy_plot::pareto(p, &rows, &front, floor_w / 60.0)
+    })?;
     let lowest = front
         .iter()
         .copied()
         .min_by(|&a, &b| points[a].energy_wh_min.total_cmp(&points[b].energy_wh_min))
         .map(|i| &rows[i]);
     write_png(power_png, |p| energy_plot::breakdown(p, &rows[0], lowest))?;
+    // Each controller's settings are contiguous, its default first (see `settings`).
+    let per_controller: Vec<(&str, serde_json::Value, bool)> = rows
+        .chunk_by(|a, b| a.setting.controller == b.setting.controller)
+        .map(|chunk| {
+            let (value, met) = controller_summary(chunk, floor_w);
+            (chunk[0].setting.controller.name(), value, met)
+        })
+        .collect();
     let summary = json!({
         "settings": rows.len(),
         "seeds": args.seeds,
         "flights": runs.len(),
         "scenario": args.scenario,
         "duration_s": args.duration,
-        "default_rms_hold_error_m": default.error_m,
-        "default_hold_energy_wh_per_min": default.energy_wh_min,
         "still_hover_power_w": floor_w,
-        "default_hold_power_w": rows[0].hold_power_w,
-        "default_headroom_over_still_hover": 1.0 - floor_w / rows[0].hold_power_w,
-        "default_power_fraction": power_fraction(&rows[0]),
         "pareto_settings": front.len(),
         "failed_settings": rows.iter().filter(|r| r.failed > 0).count(),
-        "best_saving_within_10pct_error": verdict.saving_within_slack,
-        "best_setting": best.map(|r| json!({
-            "controller": r.setting.controller.name(),
-            "position_kp": r.setting.gains.position_kp,
-            "velocity_kp": r.setting.gains.velocity_kp,
-            "command_tau_s": r.setting.gains.command_tau_s,
-            "rms_hold_error_m": r.point.error_m,
-            "hold_energy_wh_per_min": r.point.energy_wh_min,
-        })),
-        "largest_saving_any_error": verdict.largest_saving,
-        "target_met": verdict.met,
+        "controllers": per_controller
+            .iter()
+            .map(|(name, v, _)| (name.to_string(), v.clone()))
+            .collect::<serde_json::Map<_, _>>(),
+        "target_met": per_controller.iter().any(|c| c.2),
     });
     let text = serde_json::to_string_pretty(&summary).map_err(|e| CliError(e.to_string()))?;
     output::write(&args.out.join("summary.json"), (text + "\n").as_bytes())?;
