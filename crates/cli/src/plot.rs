@@ -30,6 +30,7 @@ use crate::report::{CliError, CliResult};
 use plotters::prelude::*;
 use plumbline_io::carmen::{LaserRecord, OdomPose};
 use plumbline_io::output::OutputFile;
+use plumbline_io::trajectory::TrajectoryPoint;
 use std::path::Path;
 
 /// Plots are PNG files, and the encoder picks the format by the name: refuse any other name up
@@ -123,6 +124,38 @@ impl TrajectoryPlot {
         self.scans.push(|| (rec.clone(), pose));
         self.path.push(|| (pose.x_m, pose.y_m));
         self.last = Some((pose.x_m, pose.y_m));
+    }
+}
+
+/// The scans a trajectory plot draws, sampled as they stream by before their poses are final
+/// (SLAM places them only once its pose graph is optimised): the same sample
+/// [`TrajectoryPlot::add`] keeps, so both commands draw the same scans.
+pub struct PlotScans(EvenSample<LaserRecord>);
+
+impl PlotScans {
+    pub fn new() -> Self {
+        Self(EvenSample::new(PLOT_SCANS))
+    }
+
+    pub fn add(&mut self, rec: &LaserRecord) {
+        self.0.push(|| rec.clone());
+    }
+
+    /// The plot with each sampled scan at its pose in `trajectory`, which holds one point for
+    /// every scan added, in order.
+    pub fn place(self, trajectory: &[TrajectoryPoint]) -> TrajectoryPlot {
+        let mut plot = TrajectoryPlot::new();
+        for point in trajectory {
+            plot.path.push(|| (point.pose.x_m, point.pose.y_m));
+            plot.last = Some((point.pose.x_m, point.pose.y_m));
+        }
+        plot.scans.items = self
+            .0
+            .items
+            .into_iter()
+            .filter_map(|(i, rec)| trajectory.get(i).map(|p| (i, (rec, p.pose))))
+            .collect();
+        plot
     }
 }
 

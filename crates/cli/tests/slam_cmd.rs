@@ -134,6 +134,42 @@ fn poses(path: &Path) -> Vec<[f64; 4]> {
 }
 
 #[test]
+fn a_log_cut_off_mid_line_names_the_line_and_leaves_the_old_outputs_alone() {
+    let dir = temp_dir("cut");
+    let full = std::fs::read_to_string(repo("data/intel-excerpt.clf")).unwrap();
+    // Cut in the middle of a scan line three quarters of the way through, as a recorder that
+    // lost power leaves a file.
+    let at = full[..full.len() * 3 / 4].rfind("FLASER").unwrap() + 40;
+    let log = dir.join("cut.clf");
+    std::fs::write(&log, &full[..at]).unwrap();
+    let line = full[..at].lines().count();
+    let traj = dir.join("t.txt");
+    std::fs::write(&traj, "old\n").unwrap();
+    let out = run(&[
+        "slam",
+        s(&log),
+        "--out",
+        s(&traj),
+        "--map",
+        s(&dir.join("m")),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("cut.clf:{line}")), "{err}");
+    assert_eq!(std::fs::read_to_string(&traj).unwrap(), "old\n");
+    assert!(!dir.join("m.pgm").exists());
+    // With the bad line passed over, every scan before it is mapped.
+    let summary = ok(&["slam", s(&log), "--skip-bad-lines", "--json"]);
+    let scans_before = full[..at]
+        .lines()
+        .filter(|l| l.starts_with("FLASER "))
+        .count()
+        - 1;
+    assert_eq!(summary["scans"].as_u64().unwrap() as usize, scans_before);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn a_blind_stretch_is_reported_as_lost_and_never_turns_into_nan() {
     let dir = temp_dir("blind");
     // 60 scans (about 12 s) where every beam reads the sensor's "no return".

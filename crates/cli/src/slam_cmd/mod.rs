@@ -5,12 +5,13 @@
 mod outputs;
 mod truth;
 
-use crate::log_args::{odometry_prior, LogArgs};
+use crate::log_args::{no_scans, odometry_prior, report_bad_lines, LogArgs};
 use crate::odometry_cmd::{percentile, MAX_BEAMS};
-use crate::report::{print_summary, progress, CliError, CliResult};
+use crate::plot::PlotScans;
+use crate::report::{print_summary, progress_bytes, CliError, CliResult};
 use clap::Args;
 use plumbline_core::scan::Scan;
-use plumbline_io::carmen::OdomPose;
+use plumbline_io::carmen::{open_log, OdomPose};
 use plumbline_io::output::check_distinct;
 use plumbline_slam::map_files::check_writable;
 use plumbline_slam::{local_map_cells, Slam, SlamConfig};
@@ -85,24 +86,25 @@ pub fn run(args: SlamArgs) -> CliResult {
         .zip(args.truth.as_deref())
         .map(|(w, t)| truth::Truth::load(w, t))
         .transpose()?;
-    let log = args.log_args.read(&args.log)?;
+    let (mut reader, read_progress) = open_log(&args.log, &args.log_args.options())?;
     let config = SlamConfig::default();
     let mut cells = local_map_cells(&config);
     let mut slam: Slam<MAX_BEAMS> =
         Slam::new(config, &mut cells, true).map_err(|e| CliError(e.0))?;
-    let bar = progress(log.scans.len() as u64, "slam");
-    let mut anchors: Vec<outputs::Anchor> = Vec::with_capacity(log.scans.len());
-    let mut times_us = Vec::with_capacity(log.scans.len());
+    let bar = progress_bytes(read_progress.total, "slam");
+    let mut anchors: Vec<outputs::Anchor> = Vec::new();
+    let mut plot_scans = args.plot.is_some().then(PlotScans::new);
+    let mut times_us = Vec::new();
     let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
     let mut previous_odom: Option<OdomPose> = None;
     let mut lost_s = 0.0;
-    let mut previous_stamp: Option<f64> = None;
-    for (i, rec) in log.scans.iter().enumerate() {
+    let mut span_s: Option<(f64, f64)> = None;
+    while let Some(rec) = reader.next_scan()? {
         *scan = rec.to_scan().map_err(|_| {
             CliError(format!(
                 "{}: scan {} has {} beams; at most {MAX_BEAMS} are supported",
                 args.log.display(),
-                i + 1,
+                anchors.len() + 1,
                 rec.beam_count()
             ))
         })?;
@@ -111,35 +113,43 @@ pub fn run(args: SlamArgs) -> CliResult {
         let start = Instant::now();
         let out = slam.add_scan(&scan, prior);
         times_us.push(start.elapsed().as_secs_f64() * 1e6);
+        // The time since the last scan counts as lost when this scan could not be matched.
+        if let (true, Some((_, last))) = (out.predicted, span_s) {
+            lost_s += (rec.timestamp_s - last).abs();
+        }
+        span_s = Some((span_s.map_or(rec.timestamp_s, |s| s.0), rec.timestamp_s));
+        if let Some(p) = plot_scans.as_mut() {
+            p.add(&rec);
+        }
         anchors.push(outputs::Anchor {
+            timestamp_text: rec.timestamp_text,
+            timestamp_s: rec.timestamp_s,
             keyframe: out.keyframe,
             relative: out.relative,
             lost: out.predicted,
         });
-        // The time since the last scan counts as lost when this scan could not be matched.
-        if out.predicted {
-            lost_s += previous_stamp.map_or(0.0, |p| (rec.timestamp_s - p).abs());
-        }
-        previous_stamp = Some(rec.timestamp_s);
-        bar.inc(1);
+        bar.set_position(read_progress.bytes_read());
     }
     bar.finish_and_clear();
+    report_bad_lines(reader.stats());
+    let Some((first_s, last_s)) = span_s else {
+        return Err(no_scans(&args.log));
+    };
     let tracking = slam.tracking_stats();
     let finished = slam
         .finish()
         .ok_or_else(|| CliError("the SLAM back end stopped unexpectedly".into()))?;
     let backend = &finished.backend;
-    let trajectory = outputs::trajectory(&log.scans, &anchors, backend.poses());
-    let written = staged.write(args.map.as_deref(), &log.scans, &trajectory, backend)?;
+    let trajectory = outputs::trajectory(anchors, backend.poses());
+    let written = staged.write(args.map.as_deref(), plot_scans, &trajectory, backend)?;
     let map_error = match (&truth, &written.grid) {
-        (Some(truth), Some(grid)) => truth.map_error(grid, &log.scans[0])?,
-        (Some(truth), None) => truth.map_error(&outputs::grid(backend)?, &log.scans[0])?,
+        (Some(truth), Some(grid)) => truth.map_error(grid, first_s)?,
+        (Some(truth), None) => truth.map_error(&outputs::grid(backend)?, first_s)?,
         _ => None,
     };
     times_us.sort_by(f64::total_cmp);
     let stats = backend.stats();
-    let duration = log.scans.last().map_or(0.0, |l| l.timestamp_s)
-        - log.scans.first().map_or(0.0, |f| f.timestamp_s);
+    let duration = last_s - first_s;
     let wall_s = wall.elapsed().as_secs_f64();
     let summary = json!({
         "scans": tracking.scans,

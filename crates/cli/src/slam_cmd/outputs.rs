@@ -1,9 +1,9 @@
 //! What `plumbline slam` writes: the trajectory, the map files, the pose graph and the plot.
 
-use crate::plot::{plot_trajectory, stage_png, write_png, TrajectoryPlot};
+use crate::plot::{plot_trajectory, stage_png, write_png, PlotScans};
 use crate::report::CliError;
 use plumbline_core::geom::Pose2;
-use plumbline_io::carmen::{LaserRecord, OdomPose};
+use plumbline_io::carmen::OdomPose;
 use plumbline_io::output::OutputFile;
 use plumbline_io::trajectory::{write_trajectory, TrajectoryPoint};
 use plumbline_slam::backend::Backend;
@@ -23,10 +23,13 @@ pub struct Written {
     pub grid: Option<OccupancyGrid>,
 }
 
-/// Where a scan sits in the graph: its keyframe (if any yet), its pose relative to it, and
-/// whether that pose is a prediction (the match failed).
-#[derive(Clone, Copy, Debug)]
+/// Where a scan sits in the graph: its time, its keyframe (if any yet), its pose relative to
+/// it, and whether that pose is a prediction (the match failed). All a scan leaves behind once
+/// it has been tracked, so memory grows by a few dozen bytes a scan, not by the scan.
+#[derive(Clone, Debug)]
 pub struct Anchor {
+    pub timestamp_text: String,
+    pub timestamp_s: f64,
     pub keyframe: Option<usize>,
     pub relative: Pose2,
     pub lost: bool,
@@ -35,21 +38,16 @@ pub struct Anchor {
 /// Every scan's final pose: its keyframe's optimised pose composed with the tracked motion from
 /// that keyframe (scans before the first keyframe keep the tracker's pose). Predicted poses are
 /// marked lost, so the trajectory file says which poses are not measurements.
-pub fn trajectory(
-    scans: &[LaserRecord],
-    anchors: &[Anchor],
-    keyframe_poses: &[Pose2],
-) -> Vec<TrajectoryPoint> {
-    scans
-        .iter()
-        .zip(anchors)
-        .map(|(rec, a)| TrajectoryPoint {
-            timestamp_text: rec.timestamp_text.clone(),
-            timestamp_s: rec.timestamp_s,
+pub fn trajectory(anchors: Vec<Anchor>, keyframe_poses: &[Pose2]) -> Vec<TrajectoryPoint> {
+    anchors
+        .into_iter()
+        .map(|a| TrajectoryPoint {
             pose: OdomPose::from_f32(
                 a.keyframe
                     .map_or(a.relative, |k| keyframe_poses[k].compose(a.relative)),
             ),
+            timestamp_text: a.timestamp_text,
+            timestamp_s: a.timestamp_s,
             lost: a.lost,
         })
         .collect()
@@ -99,7 +97,7 @@ impl Staged {
     pub fn write<const N: usize>(
         self,
         map: Option<&Path>,
-        scans: &[LaserRecord],
+        plot_scans: Option<PlotScans>,
         trajectory: &[TrajectoryPoint],
         backend: &Backend<N>,
     ) -> Result<Written, CliError> {
@@ -123,11 +121,8 @@ impl Staged {
                 .map_err(|e| w.error(e))?;
             w.commit()?;
         }
-        if let Some(out) = self.plot {
-            let mut data = TrajectoryPlot::new();
-            for (rec, point) in scans.iter().zip(trajectory) {
-                data.add(rec, point.pose);
-            }
+        if let (Some(out), Some(scans)) = (self.plot, plot_scans) {
+            let data = scans.place(trajectory);
             write_png(out, |p| plot_trajectory(p, &data))?;
         }
         Ok(written)

@@ -2,7 +2,6 @@
 
 use crate::report::CliError;
 use crate::sim::load_world;
-use plumbline_io::carmen::LaserRecord;
 use plumbline_io::trajectory::read_trajectory;
 use plumbline_sim::map_error::{grid_map_error, MapError};
 use plumbline_sim::world::World;
@@ -32,9 +31,9 @@ impl Truth {
     pub fn map_error(
         &self,
         grid: &OccupancyGrid,
-        first: &LaserRecord,
+        first_scan_s: f64,
     ) -> Result<Option<MapError>, CliError> {
-        let t = first.timestamp_s;
+        let t = first_scan_s;
         let &(stamp, start) = self
             .poses
             .iter()
