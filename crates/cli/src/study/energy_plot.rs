@@ -3,6 +3,7 @@
 
 use super::energy::Row;
 use crate::plot::fonts_available;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plumbline_sim::scenario::Controller;
 use std::error::Error;
@@ -118,12 +119,7 @@ pub fn pareto(
         }
     }
     if labels {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
+        legend(&mut chart)?;
     }
     root.present()?;
     Ok(())
@@ -196,13 +192,22 @@ pub fn breakdown(path: &Path, default: &Row, lowest: Option<&Row>) -> Result<(),
         }
     }
     if labels {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
+        legend(&mut chart)?;
     }
     root.present()?;
+    Ok(())
+}
+
+type Chart<'a, 'b> =
+    ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The series labels in the upper right corner, on a light box.
+fn legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<(), Box<dyn Error>> {
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
     Ok(())
 }

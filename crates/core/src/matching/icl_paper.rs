@@ -164,6 +164,15 @@ mod tests {
         prepared
     }
 
+    /// Fig. 4 from the identity with the default rate and iteration count.
+    fn fig_4(
+        reference: &PreparedScan<360>,
+        current: &PreparedScan<360>,
+        rejection: Option<PaperRejection>,
+    ) -> PaperMatch {
+        run(reference, current, Pose2::IDENTITY, 1.0, 20, rejection)
+    }
+
     /// Beams of a scan from the origin that end on the person at `c`.
     fn person_hits(c: Vec2) -> u16 {
         let with = scan(Vec2::ZERO, Some(c));
@@ -187,15 +196,8 @@ mod tests {
             gain: 4.0,
             floor_m: 0.0,
         };
-        let with = run(
-            &reference,
-            &current,
-            Pose2::IDENTITY,
-            1.0,
-            20,
-            Some(rejection),
-        );
-        let without = run(&reference, &current, Pose2::IDENTITY, 1.0, 20, None);
+        let with = fig_4(&reference, &current, Some(rejection));
+        let without = fig_4(&reference, &current, None);
         let hits = person_hits(after);
         assert!(hits >= 5, "{hits}");
         // Every point on the person and none of the room.
@@ -219,14 +221,7 @@ mod tests {
             gain: 4.0,
             floor_m: 0.0,
         };
-        let found = run(
-            &reference,
-            &current,
-            Pose2::IDENTITY,
-            1.0,
-            20,
-            Some(rejection),
-        );
+        let found = fig_4(&reference, &current, Some(rejection));
         assert_eq!(found.rejected, 0, "{found:?}");
         assert!((found.pose.translation() - step).norm() < 0.01, "{found:?}");
     }
