@@ -101,6 +101,7 @@ fn fly(vehicle: &mut Vehicle) -> Report {
                 arm: t_s > 0.5,
                 ..PilotInput::default()
             },
+            companion: Default::default(),
         });
         let outputs = vehicle.onboard.step(&inputs, scan.as_ref(), DT_S);
         report.motors_finite &= outputs.motors.throttle_norm.iter().all(|m| m.is_finite());

@@ -183,6 +183,10 @@ pub enum FlightMode {
     Takeoff,
     /// Holding position and heading.
     Hold,
+    /// Flying the companion's exploration setpoints (holding while they are stale).
+    Explore,
+    /// Flying the companion's path-home setpoints back to the take-off point.
+    Return,
     /// Descending; disarms on touchdown.
     Land,
     /// Pilot sticks with rate damping.
@@ -204,6 +208,8 @@ pub enum FailsafeReason {
     BatteryCritical,
     /// The kill switch stopped the motors.
     KillSwitch,
+    /// The companion sent no setpoint for too long during a mission: held, then landed.
+    CompanionLost,
 }
 
 /// Everything the vehicle hands the autopilot for one step.
@@ -219,6 +225,8 @@ pub struct Inputs {
     /// A new battery reading, if one arrived since the last step.
     pub battery: Option<BatterySample>,
     pub pilot: PilotInput,
+    /// What the companion computer sent since the last step (all `None` without one).
+    pub companion: CompanionMessages,
 }
 
 /// What the autopilot hands back after one step.
@@ -231,6 +239,76 @@ pub struct Outputs {
     pub estimate: EstimatedState,
     /// The position setpoint being flown, when the mode has one.
     pub setpoint: Option<PositionSetpoint>,
+}
+
+/// A pose from the companion computer's SLAM: where the vehicle is in the companion's map frame.
+///
+/// The content of MAVLink ODOMETRY (frame_id LOCAL_FRD, child_frame_id BODY_FRD, estimator_type
+/// VISION) restricted to what a 2-D lidar SLAM knows; the MAVLink layer converts ENU/FLU to
+/// NED/FRD. The map frame is the companion's: the autopilot anchors it to its own world frame
+/// (a re-anchoring on every `reset_counter` change), so the two need not share an origin.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PoseFix {
+    /// Time the pose belongs to, on the autopilot's clock: for a revolution deskewed to
+    /// mid-revolution (as the onboard odometry does), the middle of the revolution, not its
+    /// first beam; the fix is compared with the estimate taken back to this time.
+    pub t_s: f64,
+    /// Position in the companion's map frame (m).
+    pub position_m: [f32; 2],
+    /// Heading in the map frame, counter-clockwise from map x (rad).
+    pub yaw_rad: f32,
+    /// Covariance of (x, y, yaw); units m^2, m*rad, rad^2. Row-major, symmetric.
+    pub covariance: [[f32; 3]; 3],
+    /// Match quality 0 (unknown) to 100 (best); `None` when the SLAM is lost (MAVLink -1).
+    pub quality_pct: Option<u8>,
+    /// Bumped by the companion on every re-localisation (a jump of its pose); wraps at 255.
+    pub reset_counter: u8,
+}
+
+/// What the companion asks the vehicle to fly on the current leg.
+///
+/// The content of MAVLink SET_POSITION_TARGET_LOCAL_NED in the companion's map frame: either a
+/// position (type mask: position and yaw) or a horizontal velocity (velocity and yaw). Height
+/// stays the autopilot's: the mission flies at the take-off hold height.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SetpointTarget {
+    /// Fly to and hold this map position (m) with this heading (rad).
+    Position { position_m: [f32; 2], yaw_rad: f32 },
+    /// Fly this map-frame horizontal velocity (m/s) with this heading (rad).
+    Velocity {
+        velocity_m_s: [f32; 2],
+        yaw_rad: f32,
+    },
+}
+
+/// One setpoint and when the companion made it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CompanionSetpoint {
+    /// Time the setpoint was computed, on the autopilot's clock; older than
+    /// `MissionConfig::setpoint_timeout_s` counts as stale.
+    pub t_s: f64,
+    pub target: SetpointTarget,
+}
+
+/// Mission commands the companion sends (MAVLink COMMAND_LONG on the wire).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MissionCommand {
+    /// Leave the hold after take-off and fly the exploration setpoints.
+    StartExplore,
+    /// Exploration is finished (coverage stopped growing, nothing reachable is left): return.
+    ExploreDone,
+}
+
+/// Everything the companion computer hands the flight part in one step; each part is optional
+/// and independent (they arrive at their own rates).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CompanionMessages {
+    pub pose: Option<PoseFix>,
+    pub setpoint: Option<CompanionSetpoint>,
+    pub command: Option<MissionCommand>,
+    /// Length of the planned path from here to the take-off point (m), for the battery
+    /// decision; the latest one counts until a new one arrives.
+    pub path_home_m: Option<f32>,
 }
 
 #[cfg(test)]

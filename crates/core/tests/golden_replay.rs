@@ -68,6 +68,7 @@ fn parse_inputs(text: &str) -> Vec<Step> {
                     scan_match: None,
                     battery: None,
                     pilot,
+                    companion: Default::default(),
                 },
                 scan: None,
             });

@@ -90,6 +90,7 @@ fn failsafe_name(r: FailsafeReason) -> &'static str {
         FailsafeReason::BatteryLow => "battery_low",
         FailsafeReason::BatteryCritical => "battery_critical",
         FailsafeReason::KillSwitch => "kill_switch",
+        FailsafeReason::CompanionLost => "companion_lost",
     }
 }
 
@@ -98,6 +99,8 @@ fn mode_name(m: FlightMode) -> &'static str {
         FlightMode::Disarmed => "disarmed",
         FlightMode::Takeoff => "takeoff",
         FlightMode::Hold => "hold",
+        FlightMode::Explore => "explore",
+        FlightMode::Return => "return",
         FlightMode::Land => "land",
         FlightMode::Manual => "manual",
         FlightMode::Killed => "killed",

@@ -7,6 +7,7 @@
 //! finite motor commands.
 
 use super::events::{EventKind, EventLog};
+use super::mission::{Mission, MissionConfig};
 use super::supervisor::{Status, Supervisor, SupervisorConfig, EVENT_LOG_LEN};
 use crate::control::airframe::Airframe;
 use crate::control::cascade::{Cascade, CascadeConfig, CascadeSetpoint, Vertical};
@@ -15,6 +16,7 @@ use crate::control::mrac::{FallbackReason, Mrac, MracConfig, AUTOPILOT_CENTRES};
 use crate::control::sas::{self, SasConfig};
 use crate::estimate::ekf::Outcome;
 use crate::estimate::estimator::{Estimator, EstimatorConfig, EstimatorCounters, Situation};
+use crate::estimate::pose_fix::CompanionFrame;
 use crate::msgs::{
     EstimatedState, FailsafeReason, FlightMode, FrameKind, Inputs, MotorCommands, Outputs,
     PilotInput, PositionSetpoint, ScanMatchStatus,
@@ -34,6 +36,7 @@ pub struct AutopilotConfig {
     pub sas: SasConfig,
     pub supervisor: SupervisorConfig,
     pub landing: LandingConfig,
+    pub mission: MissionConfig,
 }
 
 impl AutopilotConfig {
@@ -117,8 +120,11 @@ pub struct Autopilot {
     supervisor: Supervisor,
     cascade: Cascade,
     mixer: Mixer,
+    mission: Mission,
     /// Hold point and heading: set at takeoff and when the pilot hands back control.
     home: PositionSetpoint,
+    /// Where the vehicle took off (world x, y): where a mission returns to.
+    takeoff_xy: [f32; 2],
     mode: FlightMode,
     saturated: bool,
     /// Last step's collective was below `landing.low_thrust_fraction` of hover.
@@ -149,7 +155,9 @@ impl Autopilot {
             supervisor,
             cascade,
             mixer: Mixer::new(config.frame),
+            mission: Mission::new(config.mission),
             home: PositionSetpoint::default(),
+            takeoff_xy: [0.0; 2],
             mode: FlightMode::Disarmed,
             saturated: false,
             low_thrust: false,
@@ -178,6 +186,16 @@ impl Autopilot {
     /// The MRAC flying the outer loops, if it does (its weight norm, hedge and fallback).
     pub fn mrac(&self) -> Option<&Mrac<AUTOPILOT_CENTRES>> {
         self.cascade.mrac()
+    }
+
+    /// The exploration mission's state and refused companion inputs.
+    pub fn mission(&self) -> &Mission {
+        &self.mission
+    }
+
+    /// The companion's map frame (its anchor) and the pose-fix tallies.
+    pub fn companion_frame(&self) -> &CompanionFrame {
+        self.estimator.companion_frame()
     }
 
     /// One pass of the onboard loop.
@@ -214,11 +232,20 @@ impl Autopilot {
             let outcome = self.estimator.fuse_scan_match(&m, latency_s);
             m.status == ScanMatchStatus::Matched && outcome == Outcome::Accepted
         });
+        if let Some(fix) = &inputs.companion.pose {
+            self.estimator
+                .fuse_pose_fix(fix, (inputs.t_s - fix.t_s) as f32);
+        }
         self.estimator.fuse_situation(&Situation {
             disarmed: self.mode == FlightMode::Disarmed,
             rotors_carry: matches!(
                 self.mode,
-                FlightMode::Takeoff | FlightMode::Hold | FlightMode::Land | FlightMode::Manual
+                FlightMode::Takeoff
+                    | FlightMode::Hold
+                    | FlightMode::Explore
+                    | FlightMode::Return
+                    | FlightMode::Land
+                    | FlightMode::Manual
             ),
             lidar_lost: self.supervisor.failsafe() == Some(FailsafeReason::LidarLost),
             ground_height_m: self.config.landing.ground_height_m,
@@ -229,6 +256,20 @@ impl Autopilot {
             .body_rates(finite_or_zero(inputs.imu.gyro_rad_s));
 
         // ---- supervise: modes and failsafes ----
+        self.mission
+            .observe(inputs.t_s, &inputs.companion, battery_v, dt);
+        let frame = *self.estimator.companion_frame();
+        if matches!(
+            self.mode,
+            FlightMode::Takeoff | FlightMode::Hold | FlightMode::Explore | FlightMode::Return
+        ) {
+            self.mission.track_home(self.takeoff_xy, &frame);
+        }
+        let home_xy = self.mission.home(self.takeoff_xy, &frame);
+        let c = &self.config;
+        let landing_s = c.supervisor.takeoff_height_m / c.landing.descent_m_s;
+        let here_xy = [estimate.position_m[0], estimate.position_m[1]];
+        let mission = self.mission.status(inputs.t_s, here_xy, home_xy, landing_s);
         let status = Status {
             t_s: inputs.t_s,
             pilot,
@@ -236,15 +277,18 @@ impl Autopilot {
             scan_accepted,
             battery_v,
             low_thrust: self.low_thrust,
+            mission,
         };
         let mode = self.supervisor.update(&status);
         if mode != self.mode {
-            self.enter(mode, &estimate);
+            // A return lands at the take-off point; any other mission landing where it is.
+            let land_xy = if mission.at_home { home_xy } else { here_xy };
+            self.enter(mode, &estimate, inputs.t_s, land_xy);
         }
         let failsafe = self.supervisor.failsafe();
 
         // ---- guide: what this mode asks for ----
-        let setpoint = self.guide(mode, failsafe, &estimate);
+        let setpoint = self.guide(mode, failsafe, &estimate, inputs.t_s);
 
         // ---- control: cascade in the autonomous modes, rate damping in manual ----
         let airborne = estimate.position_m[2] > self.config.landing.ground_height_m;
@@ -297,8 +341,9 @@ impl Autopilot {
         self.last
     }
 
-    /// Mode entry actions: capture the hold point, forget controller history.
-    fn enter(&mut self, mode: FlightMode, e: &EstimatedState) {
+    /// Mode entry actions: capture the hold point (a mission's landing lands at `land_xy`),
+    /// forget controller history.
+    fn enter(&mut self, mode: FlightMode, e: &EstimatedState, t_s: f64, land_xy: [f32; 2]) {
         let here = PositionSetpoint {
             position_m: e.position_m,
             yaw_rad: e.yaw_rad,
@@ -309,24 +354,34 @@ impl Autopilot {
                 if mode == FlightMode::Takeoff || self.mode == FlightMode::Manual {
                     self.home = here;
                 }
+                if mode == FlightMode::Takeoff {
+                    self.takeoff_xy = [here.position_m[0], here.position_m[1]];
+                }
                 self.home.position_m[2] = self.config.supervisor.takeoff_height_m;
+            }
+            FlightMode::Land if matches!(self.mode, FlightMode::Explore | FlightMode::Return) => {
+                self.home.position_m[0] = land_xy[0];
+                self.home.position_m[1] = land_xy[1];
+                self.home.yaw_rad = e.yaw_rad;
             }
             FlightMode::Disarmed | FlightMode::Killed => {
                 self.saturated = false;
                 self.cascade.forget_learning();
             }
-            FlightMode::Land | FlightMode::Manual => {}
+            FlightMode::Land | FlightMode::Manual | FlightMode::Explore | FlightMode::Return => {}
         }
+        self.mission.enter(mode, t_s);
         self.cascade.reset();
         self.mode = mode;
     }
 
     /// The cascade setpoint of each flying mode.
     fn guide(
-        &self,
+        &mut self,
         mode: FlightMode,
         failsafe: Option<FailsafeReason>,
         e: &EstimatedState,
+        t_s: f64,
     ) -> Option<CascadeSetpoint> {
         let hold_xy = [self.home.position_m[0], self.home.position_m[1]];
         let yaw_rad = self.home.yaw_rad;
@@ -336,6 +391,19 @@ impl Autopilot {
                 vertical: Vertical::Height(self.home.position_m[2]),
                 yaw_rad,
             }),
+            FlightMode::Explore | FlightMode::Return => {
+                // Lidar lost: the companion's setpoints are not chased on the IMU alone; the
+                // mission holds, as the hold mode would, until the failsafe lands or clears.
+                let lidar_lost = failsafe == Some(FailsafeReason::LidarLost);
+                let frame = *self.estimator.companion_frame();
+                let gain = self.config.cascade.position_xy.kp;
+                let [x, y, yaw_rad] = self.mission.target(t_s, &frame, e, gain, lidar_lost);
+                Some(CascadeSetpoint {
+                    horizontal_m: Some([x, y]),
+                    vertical: Vertical::Height(self.home.position_m[2]),
+                    yaw_rad,
+                })
+            }
             FlightMode::Land => {
                 let c = &self.config.landing;
                 let urgent = matches!(

@@ -2,9 +2,12 @@
 
 pub mod autopilot;
 pub mod events;
+pub mod mission;
 pub mod onboard;
 pub mod supervisor;
 #[cfg(test)]
 mod test_vehicle;
+#[cfg(test)]
+mod mission_tests;
 #[cfg(test)]
 mod tests;

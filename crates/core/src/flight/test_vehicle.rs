@@ -195,6 +195,7 @@ impl TestVehicle {
                 voltage_v: self.battery_v,
             }),
             pilot: self.pilot,
+            companion: Default::default(),
         }
     }
 }

@@ -225,6 +225,7 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
             scan_match: None,
             battery: Some(frame.battery),
             pilot: self.script.radio_at(frame.t_s),
+            companion: Default::default(),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         let mut log = self.log.borrow_mut();

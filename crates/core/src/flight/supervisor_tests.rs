@@ -1,0 +1,192 @@
+//! Tests of [`super`], kept apart so the module itself stays short.
+
+use super::*;
+
+/// Drives a supervisor with a scripted world: a height, a battery, a lidar that can stop.
+struct Script {
+    sup: Supervisor,
+    t_s: f64,
+    pilot: PilotInput,
+    height_m: f32,
+    valid: bool,
+    lidar: bool,
+    battery_v: f32,
+    low_thrust: bool,
+}
+
+impl Script {
+    fn new() -> Self {
+        Self {
+            sup: Supervisor::new(SupervisorConfig::default()),
+            t_s: 0.0,
+            pilot: PilotInput::default(),
+            height_m: 0.0,
+            valid: true,
+            lidar: true,
+            battery_v: 12.0,
+            low_thrust: false,
+        }
+    }
+
+    /// Runs for `secs` at 100 Hz (scans at 5 Hz) and returns the final mode.
+    fn run(&mut self, secs: f64) -> FlightMode {
+        let steps = (secs * 100.0).round() as usize;
+        for _ in 0..steps {
+            self.t_s += 0.01;
+            let tick = (self.t_s * 100.0).round() as u64;
+            let estimate = EstimatedState {
+                position_m: [0.0, 0.0, self.height_m],
+                valid: self.valid,
+                ..Default::default()
+            };
+            self.sup.update(&Status {
+                t_s: self.t_s,
+                pilot: self.pilot,
+                estimate,
+                scan_accepted: self.lidar && tick.is_multiple_of(20),
+                battery_v: Some(self.battery_v),
+                low_thrust: self.low_thrust,
+                mission: MissionStatus::default(),
+            });
+        }
+        self.sup.mode()
+    }
+
+    fn climb_to_hold(&mut self) {
+        self.run(0.1);
+        self.pilot.arm = true;
+        assert_eq!(self.run(0.1), FlightMode::Takeoff);
+        self.height_m = 1.0;
+        assert_eq!(self.run(0.1), FlightMode::Hold);
+    }
+}
+
+#[test]
+fn a_normal_flight_goes_through_every_mode_and_logs_it() {
+    let mut s = Script::new();
+    s.climb_to_hold();
+    s.pilot.arm = false;
+    assert_eq!(s.run(0.1), FlightMode::Land);
+    // Still airborne: no disarm.
+    assert_eq!(s.run(2.0), FlightMode::Land);
+    s.height_m = 0.02;
+    assert_eq!(s.run(0.3), FlightMode::Land);
+    assert_eq!(s.run(0.5), FlightMode::Disarmed);
+    let modes: [FlightMode; 4] = {
+        let mut it = s.sup.events().iter().map(|e| match e.kind {
+            EventKind::ModeChange { to, .. } => to,
+            EventKind::Failsafe(_) | EventKind::AdaptiveFallback(_) => FlightMode::Killed,
+        });
+        core::array::from_fn(|_| it.next().unwrap())
+    };
+    use FlightMode::*;
+    assert_eq!(modes, [Takeoff, Hold, Land, Disarmed]);
+    assert_eq!(s.sup.failsafe(), None);
+}
+
+#[test]
+fn landing_on_low_thrust_disarms_even_with_a_wrong_height() {
+    let mut s = Script::new();
+    s.climb_to_hold();
+    s.pilot.arm = false;
+    assert_eq!(s.run(0.1), FlightMode::Land);
+    // The estimate insists on 1 m, but the controller has been at its low limit for 1 s.
+    s.low_thrust = true;
+    assert_eq!(s.run(0.9), FlightMode::Land);
+    assert_eq!(s.run(0.2), FlightMode::Disarmed);
+}
+
+#[test]
+fn powering_up_with_the_arm_switch_on_does_not_take_off() {
+    let mut s = Script::new();
+    s.pilot.arm = true;
+    assert_eq!(s.run(1.0), FlightMode::Disarmed);
+    s.pilot.arm = false;
+    s.run(0.1);
+    s.pilot.arm = true;
+    assert_eq!(s.run(0.1), FlightMode::Takeoff);
+}
+
+#[test]
+fn kill_switch_stops_everything_and_needs_a_fresh_arming() {
+    let mut s = Script::new();
+    s.climb_to_hold();
+    s.pilot.kill = true;
+    assert_eq!(s.run(0.01), FlightMode::Killed);
+    assert_eq!(s.sup.failsafe(), Some(FailsafeReason::KillSwitch));
+    s.pilot.kill = false;
+    s.height_m = 0.0;
+    // Arm still on: stays killed.
+    assert_eq!(s.run(1.0), FlightMode::Killed);
+    s.pilot.arm = false;
+    assert_eq!(s.run(0.1), FlightMode::Disarmed);
+    s.pilot.arm = true;
+    assert_eq!(s.run(0.1), FlightMode::Takeoff);
+    assert_eq!(s.sup.failsafe(), None);
+}
+
+#[test]
+fn lidar_lost_holds_for_a_bounded_time_then_lands() {
+    let mut s = Script::new();
+    s.climb_to_hold();
+    s.lidar = false;
+    assert_eq!(s.run(1.5), FlightMode::Hold);
+    assert_eq!(s.sup.failsafe(), Some(FailsafeReason::LidarLost));
+    // Back within the hold time: the failsafe clears.
+    s.lidar = true;
+    assert_eq!(s.run(0.5), FlightMode::Hold);
+    assert_eq!(s.sup.failsafe(), None);
+    s.lidar = false;
+    assert_eq!(s.run(1.7), FlightMode::Hold);
+    assert_eq!(s.run(0.6), FlightMode::Land);
+    assert_eq!(s.sup.failsafe(), Some(FailsafeReason::LidarLost));
+}
+
+#[test]
+fn invalid_estimate_lands() {
+    let mut s = Script::new();
+    s.climb_to_hold();
+    s.valid = false;
+    assert_eq!(s.run(0.01), FlightMode::Land);
+    assert_eq!(s.sup.failsafe(), Some(FailsafeReason::EstimateInvalid));
+}
+
+#[test]
+fn low_battery_lands_after_the_debounce_and_a_sag_does_not() {
+    let mut s = Script::new();
+    s.climb_to_hold();
+    s.battery_v = 10.3;
+    assert_eq!(s.run(0.5), FlightMode::Hold);
+    s.battery_v = 11.0;
+    assert_eq!(s.run(1.0), FlightMode::Hold);
+    s.battery_v = 10.3;
+    assert_eq!(s.run(1.1), FlightMode::Land);
+    assert_eq!(s.sup.failsafe(), Some(FailsafeReason::BatteryLow));
+    // Sagging further while landing: critical.
+    s.battery_v = 9.5;
+    s.run(1.1);
+    assert_eq!(s.sup.failsafe(), Some(FailsafeReason::BatteryCritical));
+}
+
+#[test]
+fn critical_battery_prevents_arming() {
+    let mut s = Script::new();
+    s.battery_v = 9.0;
+    s.run(2.0);
+    s.pilot.arm = true;
+    assert_eq!(s.run(0.1), FlightMode::Disarmed);
+}
+
+#[test]
+fn manual_takeover_and_hand_back() {
+    let mut s = Script::new();
+    s.climb_to_hold();
+    s.pilot.manual = true;
+    assert_eq!(s.run(0.01), FlightMode::Manual);
+    // Failsafes do not override the safety pilot.
+    s.valid = false;
+    assert_eq!(s.run(1.0), FlightMode::Manual);
+    s.valid = true;
+    s.pilot.manual = false;
+    assert_eq!(s.run(0.01), FlightMode::Hold);
+}
