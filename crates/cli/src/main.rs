@@ -11,6 +11,7 @@ mod plot;
 mod report;
 mod sim;
 mod slam_cmd;
+mod study;
 
 #[derive(Parser)]
 #[command(
@@ -35,6 +36,8 @@ enum Command {
     Lidar(lidar_cmd::LidarArgs),
     /// Fly the simulator: emulated lidar/IMU/sonar logs with exact ground truth.
     Sim(Box<sim::SimArgs>),
+    /// Studies that fly many simulated runs and answer with a table and plots.
+    Study(study::StudyArgs),
 }
 
 fn main() -> ExitCode {
@@ -45,6 +48,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => eval_cmd::run(args),
         Command::Lidar(args) => lidar_cmd::run(args),
         Command::Sim(args) => sim::run(*args),
+        Command::Study(args) => study::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -35,6 +35,10 @@ pub struct OdometryArgs {
     /// Scan matcher.
     #[arg(long, default_value = "icl", value_parser = ["icl", "icl-paper", "icp", "plicp"])]
     pub matcher: String,
+    /// With `--matcher icl-paper`: seed 000 sec. 4.2's rejection as written (a point whose cost
+    /// exceeds four times the previous revolution's squared displacement is left out).
+    #[arg(long)]
+    pub paper_rejection: bool,
     /// Use the log's odometry as the initial guess (default: lidar only, constant velocity).
     #[arg(long)]
     pub odom_prior: bool,
@@ -82,6 +86,12 @@ pub struct OdometryArgs {
 pub fn run(args: OdometryArgs) -> CliResult {
     let kind = MatcherKind::from_name(&args.matcher)
         .ok_or_else(|| CliError(format!("unknown matcher {}", args.matcher)))?;
+    if args.paper_rejection && kind != MatcherKind::IclPaper {
+        return Err(CliError(format!(
+            "--paper-rejection applies to --matcher icl-paper, not {}; `icl` rejects on its own",
+            args.matcher
+        )));
+    }
     // Everything that can be checked without the work comes first: options, names, outputs.
     let outputs: Vec<(&str, &Path)> = [("--out", &args.out), ("--plot", &args.plot)]
         .into_iter()
@@ -90,7 +100,10 @@ pub fn run(args: OdometryArgs) -> CliResult {
     check_distinct(&[("LOG", &args.log)], &outputs)?;
     let read_options = args.log_args.options();
     let config = OdometryConfig {
-        matcher: MatchConfig::with_kind(kind),
+        matcher: MatchConfig {
+            paper_rejection: args.paper_rejection,
+            ..MatchConfig::with_kind(kind)
+        },
         keyframe_distance_m: args.keyframe_distance,
         keyframe_angle_rad: args.keyframe_angle_deg.to_radians(),
         ..OdometryConfig::default()

@@ -6,7 +6,7 @@ mod explore;
 mod model_error;
 mod onboard;
 mod outputs;
-mod plot;
+pub(crate) mod plot;
 mod world;
 
 use crate::log_args::LogArgs;

@@ -3,6 +3,7 @@
 
 use super::outputs::create;
 use super::plot::{stacked_panels, Line};
+use crate::numeric::{within, Range};
 use crate::plot::write_png;
 use crate::report::CliError;
 use clap::Args;
@@ -13,7 +14,7 @@ use plumbline_sim::runner::companion::Strategy;
 use plumbline_sim::runner::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
 use plumbline_sim::scenario::score::OnboardScore;
-use plumbline_sim::scenario::{Controller, Options, TrackShape, Tuning};
+use plumbline_sim::scenario::{Controller, Gains, Options, TrackShape, Tuning, GAIN_RANGES};
 use serde_json::{json, Value};
 use std::path::Path;
 
@@ -43,6 +44,27 @@ pub struct ClosedLoopArgs {
     /// figure of `eight` in a 3 m x 3 m box centred on the start.
     #[arg(long, default_value = "square", value_parser = ["square", "eight"])]
     pub track: String,
+    /// Position-loop gain replacing the tuning's (velocity setpoint per metre of error), 1/s.
+    /// Valid range: [0.1, 5].
+    #[arg(long, value_parser = within::<f32>(gain_range(0)))]
+    pub position_kp: Option<f32>,
+    /// Velocity-loop gain replacing the tuning's (acceleration per m/s of error), 1/s.
+    /// Valid range: [0.5, 10].
+    #[arg(long, value_parser = within::<f32>(gain_range(1)))]
+    pub velocity_kp: Option<f32>,
+    /// Velocity-loop integral gain replacing the tuning's, 1/s². Valid range: [0, 2].
+    #[arg(long, value_parser = within::<f32>(gain_range(2)))]
+    pub velocity_ki: Option<f32>,
+    /// Time constant of a low-pass on the tilt command (0: none, the default), s: smoother
+    /// motor commands, slower answer to a push. Valid range: [0, 1].
+    #[arg(long, value_parser = within::<f32>(gain_range(3)))]
+    pub command_tau: Option<f32>,
+}
+
+/// The valid range of the `i`-th entry of [`GAIN_RANGES`].
+fn gain_range(i: usize) -> Range {
+    let (_, lo, hi) = GAIN_RANGES[i];
+    Range::closed(lo, hi)
 }
 
 impl ClosedLoopArgs {
@@ -68,6 +90,12 @@ impl ClosedLoopArgs {
         Options {
             controller,
             tuning,
+            gains: Gains {
+                position_kp: self.position_kp,
+                velocity_kp: self.velocity_kp,
+                velocity_ki: self.velocity_ki,
+                command_tau_s: self.command_tau,
+            },
             dynamic_rejection: !self.no_rejection,
             duration_s,
             strategy,
@@ -127,6 +155,10 @@ pub fn extend_summary(
         "controller": args.controller.as_deref().unwrap_or("pid"),
         "tuning": args.tuning,
         "track": (summary["scenario"] == "track").then_some(args.track.as_str()),
+        "position_kp": args.position_kp,
+        "velocity_kp": args.velocity_kp,
+        "velocity_ki": args.velocity_ki,
+        "command_tau_s": args.command_tau,
         "dynamic_rejection": !args.no_rejection,
         "people": config.people,
         "landed": score.landed,

@@ -54,6 +54,10 @@ pub struct CascadeConfig {
     /// run every step. Loops of a few rad/s bandwidth gain nothing from the IMU's 500 Hz, and
     /// running them there was half of the controller's cost.
     pub outer_period_s: f32,
+    /// Time constant of a first-order low-pass on the roll and pitch the velocity loop asks
+    /// for (s); 0 passes them unfiltered. Smoother tilt commands mean gentler motor speed
+    /// changes, at the price of a slower answer to a push (seed 000 sec. 5.3's trade-off).
+    pub command_tau_s: f32,
 }
 
 impl CascadeConfig {
@@ -131,6 +135,7 @@ impl Default for CascadeConfig {
             min_collective: 0.05,
             max_collective: 0.9,
             outer_period_s: 0.01,
+            command_tau_s: 0.0,
         }
     }
 }
@@ -200,6 +205,9 @@ pub struct Cascade {
     held: Option<AttitudeTarget>,
     /// Time since the outer loops last ran (s).
     outer_elapsed_s: f32,
+    /// The filtered roll and pitch commands (rad) when `command_tau_s` > 0; `None` until the
+    /// first outer run, which starts the filter at the command itself.
+    filtered_tilt_rad: Option<[f32; 2]>,
 }
 
 impl Cascade {
@@ -232,6 +240,7 @@ impl Cascade {
             wanted_collective: 0.0,
             held: None,
             outer_elapsed_s: 0.0,
+            filtered_tilt_rad: None,
         }
     }
 
@@ -304,6 +313,7 @@ impl Cascade {
         }
         self.held = None;
         self.outer_elapsed_s = 0.0;
+        self.filtered_tilt_rad = None;
     }
 
     /// Runs the four loops: setpoint and estimate in, mixer demand out. The position and
@@ -326,7 +336,7 @@ impl Cascade {
                 held
             }
             _ => {
-                let target = match self.adaptive_acceleration(setpoint, state, elapsed)? {
+                let mut target = match self.adaptive_acceleration(setpoint, state, elapsed)? {
                     Some(accel) => {
                         let target = self.invert(accel, setpoint.yaw_rad, state);
                         self.note_inversion(&target, state);
@@ -343,6 +353,7 @@ impl Cascade {
                         )?
                     }
                 };
+                self.filter_tilt(&mut target, elapsed);
                 self.held = Some(target);
                 self.outer_elapsed_s = 0.0;
                 target
@@ -363,6 +374,22 @@ impl Cascade {
         }
         let rate_sp = self.rate_setpoint(&target, state, dt)?;
         self.demand(&target, rate_sp, gyro_rad_s, dt, integrate)
+    }
+
+    /// Low-passes the tilt of `target` over `dt` (s) when a command filter is configured.
+    fn filter_tilt(&mut self, target: &mut AttitudeTarget, dt: f32) {
+        let tau = self.config.command_tau_s;
+        if tau <= 0.0 {
+            return;
+        }
+        let command = [target.roll_rad, target.pitch_rad];
+        let alpha = dt / (tau + dt);
+        let filtered = match self.filtered_tilt_rad {
+            Some(f) => [0, 1].map(|i| f[i] + alpha * (command[i] - f[i])),
+            None => command,
+        };
+        self.filtered_tilt_rad = Some(filtered);
+        [target.roll_rad, target.pitch_rad] = filtered;
     }
 
     /// The MRAC's outer loops: its pseudo-control (world acceleration, m/s^2), which goes
@@ -579,6 +606,41 @@ mod tests {
             .unwrap();
         assert!((d.collective - c.config.hover_collective).abs() < 1e-6);
         assert_eq!((d.roll, d.pitch, d.yaw), (0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn the_command_filter_lags_a_step_in_tilt_and_then_reaches_it() {
+        let config = CascadeConfig {
+            command_tau_s: 0.1,
+            ..CascadeConfig::default()
+        };
+        let mut raw = Cascade::new(CascadeConfig::default());
+        let mut smooth = Cascade::new(config);
+        let s = level_at([0.0, 0.0, 1.0]);
+        let dt = config.outer_period_s;
+        for c in [&mut raw, &mut smooth] {
+            c.run(&hold([0.0, 0.0, 1.0]), &s, [0.0; 3], dt, false)
+                .unwrap();
+            c.run(&hold([0.3, 0.0, 1.0]), &s, [0.0; 3], dt, false)
+                .unwrap();
+        }
+        let pitch = |c: &Cascade| c.held.unwrap().pitch_rad;
+        let step = pitch(&raw);
+        // One period of a 0.1 s filter: a tenth of the way (dt / (tau + dt) = 1/11).
+        assert!(step > 0.0, "{step}");
+        assert!((pitch(&smooth) - step / 11.0).abs() < 1e-6 * step.max(1.0));
+        for _ in 0..200 {
+            smooth
+                .run(&hold([0.3, 0.0, 1.0]), &s, [0.0; 3], dt, false)
+                .unwrap();
+        }
+        assert!(
+            (pitch(&smooth) - step).abs() < 1e-3 * step,
+            "{}",
+            pitch(&smooth)
+        );
+        smooth.reset();
+        assert_eq!(smooth.filtered_tilt_rad, None);
     }
 
     #[test]

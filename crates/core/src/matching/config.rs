@@ -88,6 +88,11 @@ pub struct MatchConfig {
     pub recovery_radius_m: f32,
     /// If the heading search does not rescue the match, search translation too, +- this much.
     pub recovery_translation_m: f32,
+    /// `icl-paper` only: seed 000 sec. 4.2's rejection as written (off by default): a point is
+    /// left out when its cost J exceeds `dynamic_gain * (dx_prev^2 + dy_prev^2)
+    /// + paper_rejection_floor_m^2`; the paper gives no floor (0).
+    pub paper_rejection: bool,
+    pub paper_rejection_floor_m: f32,
     /// `icl-paper` only: learning rate times point count, and its fixed iteration count.
     pub paper_rate_per_point: f32,
     pub paper_iterations: u16,
@@ -121,6 +126,8 @@ impl Default for MatchConfig {
             recovery_step_rad: 0.035,
             recovery_radius_m: 0.15,
             recovery_translation_m: 1.2,
+            paper_rejection: false,
+            paper_rejection_floor_m: 0.0,
             paper_rate_per_point: 1.0,
             paper_iterations: 20,
         }

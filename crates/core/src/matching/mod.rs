@@ -22,7 +22,7 @@ mod result;
 mod window;
 
 pub use config::{MatchConfig, MatcherKind};
-pub use icl_paper::closest_point_on_line;
+pub use icl_paper::{closest_point_on_line, PaperMatch, PaperRejection};
 pub use odometry::{LidarOdometry, OdometryConfig, OdometryStep};
 pub use prepared::PreparedScan;
 pub use result::{MatchError, MatchQuality, MatchResult, MatchStatus, UNOBSERVED_VARIANCE};
@@ -139,14 +139,20 @@ impl<const N: usize> ScanMatcher<N> {
                 reference, current, guess, prev, cfg, partners,
             ),
             MatcherKind::IclPaper => {
-                let motion = icl_paper::run(
+                let rejection = cfg.paper_rejection.then_some(PaperRejection {
+                    previous: prev,
+                    gain: cfg.dynamic_gain,
+                    floor_m: cfg.paper_rejection_floor_m,
+                });
+                let found = icl_paper::run(
                     reference,
                     current,
                     guess,
                     cfg.paper_rate_per_point,
                     cfg.paper_iterations,
+                    rejection,
                 );
-                Self::paper_report(reference, current, motion, cfg, partners)
+                Self::paper_report(reference, current, found, cfg, partners)
             }
         };
         let first = attempt(guess);
@@ -194,10 +200,11 @@ impl<const N: usize> ScanMatcher<N> {
     fn paper_report(
         reference: &PreparedScan<N>,
         current: &PreparedScan<N>,
-        motion: Pose2,
+        found: PaperMatch,
         cfg: &MatchConfig,
         partners: &mut [u16],
     ) -> Result<MatchResult, MatchError> {
+        let motion = found.pose;
         if !motion.is_finite() {
             return Err(MatchError::Diverged);
         }
@@ -219,7 +226,7 @@ impl<const N: usize> ScanMatcher<N> {
             None,
             current.len(),
             cfg.paper_iterations,
-            0,
+            found.rejected,
             MatchStatus::IterationLimit,
         ))
     }

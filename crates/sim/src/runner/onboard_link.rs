@@ -200,7 +200,7 @@ impl<const N: usize> OnboardLink<N> {
 /// Writes the simulator's revolution into `scan` as an onboard scan; the device's validity
 /// flags are kept. In place: a 1,440-beam scan is 23 kB, and returning one by value copied it
 /// twice per revolution.
-fn fill_scan<const N: usize>(s: &LidarScan, scan: &mut Scan<N>) {
+pub fn fill_scan<const N: usize>(s: &LidarScan, scan: &mut Scan<N>) {
     scan.clear(s.stamp_s);
     for (k, (&r, &ok)) in s.ranges_m.iter().zip(&s.valid).take(N).enumerate() {
         let angle = (s.start_angle_rad + s.increment_rad * k as f64) as f32;

@@ -58,6 +58,47 @@ pub enum Tuning {
     Soft,
 }
 
+/// Gains of the onboard position and velocity loops and its command filter, each replacing the
+/// tuning's value when set (the energy study sweeps them). Valid ranges: [`GAIN_RANGES`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Gains {
+    /// Position error (m) -> velocity setpoint (m/s), per horizontal axis, 1/s.
+    pub position_kp: Option<f32>,
+    /// Velocity error (m/s) -> acceleration (m/s^2), per horizontal axis, 1/s.
+    pub velocity_kp: Option<f32>,
+    /// Integral of the velocity error (m) -> acceleration (m/s^2), 1/s^2.
+    pub velocity_ki: Option<f32>,
+    /// Time constant of the low-pass on the tilt command, s (0: none).
+    pub command_tau_s: Option<f32>,
+}
+
+/// The values [`Gains`] accepts, inclusive: (name, low, high), in field order. Beyond them the
+/// cascade is either too sluggish to hold 1 m over the start or oscillates on lidar noise.
+pub const GAIN_RANGES: [(&str, f64, f64); 4] = [
+    ("position_kp", 0.1, 5.0),
+    ("velocity_kp", 0.5, 10.0),
+    ("velocity_ki", 0.0, 2.0),
+    ("command_tau_s", 0.0, 1.0),
+];
+
+impl Gains {
+    /// The set values, each checked against [`GAIN_RANGES`].
+    pub fn check(&self) -> Result<(), String> {
+        let values = [
+            self.position_kp,
+            self.velocity_kp,
+            self.velocity_ki,
+            self.command_tau_s,
+        ];
+        for ((name, lo, hi), v) in GAIN_RANGES.iter().zip(values) {
+            if let Some(v) = v.filter(|v| !(*lo..=*hi).contains(&f64::from(*v))) {
+                return Err(format!("{name} = {v} is outside [{lo}, {hi}]"));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// How to fly a scenario; plain values, whatever front end chose them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Options {
@@ -65,6 +106,8 @@ pub struct Options {
     /// survey).
     pub controller: Option<Controller>,
     pub tuning: Tuning,
+    /// Overrides of the tuning's outer-loop gains and command filter.
+    pub gains: Gains,
     /// The scan matcher's dynamic-object rejection (seed 000 sec. 4.2).
     pub dynamic_rejection: bool,
     /// Run length, s: the scenario's default when `None`.
@@ -81,6 +124,7 @@ impl Default for Options {
         Self {
             controller: None,
             tuning: Tuning::default(),
+            gains: Gains::default(),
             dynamic_rejection: true,
             duration_s: None,
             strategy: Strategy::default(),

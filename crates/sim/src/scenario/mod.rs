@@ -37,7 +37,9 @@ pub mod score;
 pub mod survey;
 pub mod track;
 
-pub use flight::{fly, Controller, Entry, Flight, Options, Report, ScenarioError, Tuning};
+pub use flight::{
+    fly, Controller, Entry, Flight, Gains, Options, Report, ScenarioError, Tuning, GAIN_RANGES,
+};
 pub use track::TrackShape;
 
 /// Every scenario, as named on the command line.
