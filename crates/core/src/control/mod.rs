@@ -6,6 +6,7 @@
 
 pub mod airframe;
 pub mod cascade;
+mod cascade_config;
 pub mod inversion;
 pub mod mixer;
 pub mod mrac;

@@ -1,6 +1,7 @@
 //! The flight software proper: modes, failsafes, the event log and the one step function.
 
 pub mod autopilot;
+mod autopilot_config;
 pub mod events;
 pub mod mission;
 pub mod onboard;
