@@ -4,6 +4,7 @@
 use super::energy::Row;
 use crate::plot::fonts_available;
 use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plumbline_sim::scenario::Controller;
 use std::error::Error;
@@ -49,17 +50,12 @@ pub fn pareto(
     let root = BitMapBackend::new(path, (1000, 700)).into_drawing_area();
     root.fill(&WHITE)?;
     let labels = fonts_available();
-    let mut builder = ChartBuilder::on(&root);
-    builder.margin(15);
-    if labels {
-        builder
-            .caption(
-                "Energy per minute of hold against RMS hold error (room, mean over seeds)",
-                ("sans-serif", 20),
-            )
-            .x_label_area_size(45)
-            .y_label_area_size(70);
-    }
+    let mut builder = titled(
+        &root,
+        labels,
+        "Energy per minute of hold against RMS hold error (room, mean over seeds)",
+        (45, 70),
+    );
     let mut chart = builder.build_cartesian_2d(e0..e1, w0..w1)?;
     if labels {
         chart
@@ -142,17 +138,12 @@ pub fn breakdown(path: &Path, default: &Row, lowest: Option<&Row>) -> Result<(),
     let root = BitMapBackend::new(path, (1000, 600)).into_drawing_area();
     root.fill(&WHITE)?;
     let labels = fonts_available();
-    let mut builder = ChartBuilder::on(&root);
-    builder.margin(15);
-    if labels {
-        builder
-            .caption(
-                "Power breakdown: motors, ESCs, avionics (fraction of total)",
-                ("sans-serif", 20),
-            )
-            .x_label_area_size(40)
-            .y_label_area_size(60);
-    }
+    let mut builder = titled(
+        &root,
+        labels,
+        "Power breakdown: motors, ESCs, avionics (fraction of total)",
+        (40, 60),
+    );
     let parts = ["motors", "ESCs", "avionics"];
     let mut chart = builder.build_cartesian_2d(0.0..3.0f64, 0.0..1.0f64)?;
     if labels {
@@ -210,4 +201,23 @@ fn legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<(), Box<dyn Error>> {
         .border_style(BLACK)
         .draw()?;
     Ok(())
+}
+
+/// The study charts' builder on `root`: their margin and, when text can be drawn (`labels`),
+/// the caption and room for the (x, y) axis labels; without fonts the plot keeps the space.
+fn titled<'a, 'b>(
+    root: &'a DrawingArea<BitMapBackend<'b>, Shift>,
+    labels: bool,
+    caption: &str,
+    (x_area, y_area): (u32, u32),
+) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {
+    let mut builder = ChartBuilder::on(root);
+    builder.margin(15);
+    if labels {
+        builder
+            .caption(caption, ("sans-serif", 20))
+            .x_label_area_size(x_area)
+            .y_label_area_size(y_area);
+    }
+    builder
 }
