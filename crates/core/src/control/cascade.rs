@@ -548,6 +548,49 @@ mod tests {
     }
 
     #[test]
+    fn a_setpoint_speeding_up_is_flown_at_its_acceleration_with_no_error() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let s = level_at([0.0, 0.0, 1.0]);
+        let sp = CascadeSetpoint {
+            feed_forward: Some(FeedForward {
+                velocity_m_s: [0.0; 2],
+                accel_m_s2: [1.0, 0.0],
+            }),
+            ..hold([0.0, 0.0, 1.0])
+        };
+        let v = c.velocity_setpoint(&sp, &s, 0.01).unwrap();
+        assert_eq!(v.accel_m_s2, [1.0, 0.0]);
+        let t = c.attitude_target(v, 0.0, &s, 0.01, false).unwrap();
+        // Thrust tilted forward so that its horizontal share is 1 m/s^2 at 1 g of lift.
+        let forward = GRAVITY_M_S2 * libm::tanf(t.pitch_rad);
+        assert!((forward - 1.0).abs() < 1e-4, "{t:?}");
+        assert!(t.roll_rad.abs() < 1e-6);
+        let bad = CascadeSetpoint {
+            feed_forward: Some(FeedForward {
+                velocity_m_s: [0.0; 2],
+                accel_m_s2: [f32::NAN, 0.0],
+            }),
+            ..sp
+        };
+        assert_eq!(
+            c.velocity_setpoint(&bad, &s, 0.01),
+            Err(PidError::NonFinite)
+        );
+    }
+
+    #[test]
+    fn the_climb_integral_may_carry_what_the_collective_bounds_can_lift() {
+        let c = CascadeConfig::default().fitted(0.275, [400.0, 400.0, 20.0]);
+        let authority = GRAVITY_M_S2 * (0.9 / 0.275 - 1.0);
+        assert!((c.climb_authority_m_s2() - authority).abs() < 1e-4);
+        assert_eq!(c.velocity_z.integral_limit, c.climb_authority_m_s2());
+        // Mass x1.3 with one motor at 80 %: 1.3 / 0.95 - 1 of g more than the model's hover.
+        assert!(c.velocity_z.integral_limit > (1.3 / 0.95 - 1.0) * GRAVITY_M_S2);
+        assert_eq!(c.hover_collective, 0.275);
+        assert_eq!(c.effectiveness_rad_s2, [400.0, 400.0, 20.0]);
+    }
+
+    #[test]
     fn target_ahead_pitches_nose_down_and_target_left_rolls_left_side_down() {
         let mut c = Cascade::new(CascadeConfig::default());
         let s = level_at([0.0, 0.0, 1.0]);

@@ -133,6 +133,20 @@ mod tests {
             r += 0.8 * 0.001;
         }
         assert!((m.position_m - r).abs() < 2e-3, "{m:?} {r}");
+        // On a point that speeds up, the model's acceleration is the point's.
+        let on_it = ReferenceChannel {
+            position_m: 1.0,
+            velocity_m_s: 0.5,
+        };
+        let a = on_it.acceleration(
+            &c,
+            Command::Track {
+                position_m: 1.0,
+                velocity_m_s: 0.5,
+                accel_m_s2: 0.7,
+            },
+        );
+        assert!((a - 0.7).abs() < 1e-6, "{a}");
     }
 
     #[test]
