@@ -42,9 +42,14 @@ impl Ekf {
     fn fuse_delta(&mut self, m: &ScanMatchDelta, latency_s: f32) -> Outcome {
         let c = Matrix3::from_fn(|i, j| m.covariance[i][j]) * self.config.scan_covariance_scale;
         let z = Vector3::new(m.dx_m, m.dy_m, m.dtheta_rad);
+        // The matcher's covariance is its information matrix inverted in f32; near a
+        // degenerate geometry it can come out indefinite despite a positive diagonal. Fused,
+        // such a noise lets the update take more variance out of a state than it had (in a gust
+        // storm a velocity variance went from 0.004 to -0.08 in one match, and the estimate was
+        // declared invalid mid-flight), so only a positive definite one is used.
         let well_formed = z.iter().all(|v| v.is_finite())
             && c.iter().all(|v| v.is_finite())
-            && (0..3).all(|i| c[(i, i)] > 0.0);
+            && ((c + c.transpose()) * 0.5).cholesky().is_some();
         if !well_formed {
             return Outcome::Invalid;
         }
@@ -171,6 +176,27 @@ mod tests {
         };
         assert_eq!(f.fuse_scan_match(&nan, 0.0), Outcome::Invalid);
         assert!(f.is_valid());
+    }
+
+    /// A noise with positive variances but a negative eigenvalue (x and y correlated beyond
+    /// 1) is no covariance: fused, it takes more variance out of the position than the filter
+    /// holds.
+    #[test]
+    fn an_indefinite_match_covariance_is_refused_and_the_filter_stays_valid() {
+        let mut f = Ekf::new(EkfConfig::default());
+        f.fuse_scan_match(&reference(), 0.0);
+        let before = f;
+        let mut m = matched(0.01, 0.0, 0.0, 0.01);
+        // Correlation 2: eigenvalues 3e-4 and -1e-4.
+        m.covariance[0][1] = 2e-4;
+        m.covariance[1][0] = 2e-4;
+        assert_eq!(f.fuse_scan_match(&m, 0.0), Outcome::Invalid);
+        assert_eq!(f, before);
+        assert!(f.is_valid());
+        // The same match with a correlation of 0.5 is used.
+        m.covariance[0][1] = 0.5e-4;
+        m.covariance[1][0] = 0.5e-4;
+        assert_eq!(f.fuse_scan_match(&m, 0.0), Outcome::Accepted);
     }
 
     #[test]
