@@ -342,17 +342,41 @@ impl Ekf {
         for &i in consider {
             k.row_mut(i).fill(0.0);
         }
-        self.x += k * residual;
         // Joseph form (I - KH) P (I - KH)^T + K R K^T multiplied out: with U = P H^T and
         // S = H U + R it is P - K U^T - U K^T + K S K^T for any gain (zeroed consider rows
         // included), which is P - (K W^T + W K^T) with W = U - K S / 2. One symmetric correction
         // of rank 2M on one triangle, mirrored: N x N temporaries and a symmetrising pass would
         // be most of an update's cost.
         let w = pht - k * s * 0.5;
+        // With a near-singular innovation covariance (a match claiming sub-millimetre
+        // precision just after the reference was cloned) the gain is large and f32 rounding in
+        // the product can leave a variance negative, which would declare the whole estimate
+        // invalid. Such an update is not applied.
+        if breaks_a_variance(&self.p, &k, &w) {
+            return Outcome::Invalid;
+        }
         subtract_symmetric_product(&mut self.p, &k, &w);
+        self.x += k * residual;
         self.x[ix::YAW] = crate::geom::normalize_angle(self.x[ix::YAW]);
         Outcome::Accepted
     }
+}
+
+/// Whether [`subtract_symmetric_product`] would leave a diagonal entry of `p` negative: the
+/// diagonal worked out by the same operations in the same order, so the answer is exact.
+fn breaks_a_variance<const M: usize>(
+    p: &Covariance,
+    k: &SMatrix<f32, N, M>,
+    w: &SMatrix<f32, N, M>,
+) -> bool {
+    (0..N).any(|i| {
+        let mut v = p[(i, i)];
+        for m in 0..M {
+            let (ki, wi) = (k[(i, m)], w[(i, m)]);
+            v -= ki * wi + wi * ki;
+        }
+        v < 0.0
+    })
 }
 
 /// `p -= k w^T + w k^T` over whole columns: contiguous and of fixed length, so the loop
@@ -414,6 +438,43 @@ mod tests {
         assert_eq!(out, Outcome::Accepted);
         assert!((f.state()[ix::POS] - 0.05).abs() < 1e-5);
         assert!((f.covariance()[(ix::POS, ix::POS)] - 0.00125).abs() < 1e-6);
+    }
+
+    /// The variance check predicts the product's diagonal exactly, and a gain that would
+    /// take more variance out of a state than it has leaves the filter as it was.
+    #[test]
+    fn an_update_that_would_leave_a_negative_variance_is_not_applied() {
+        let mut p = Covariance::identity() * 1e-3;
+        p[(ix::POS, ix::VEL)] = 2e-4;
+        p[(ix::VEL, ix::POS)] = 2e-4;
+        let mut k = SMatrix::<f32, N, 1>::zeros();
+        let mut w = SMatrix::<f32, N, 1>::zeros();
+        k[(ix::POS, 0)] = 0.3;
+        w[(ix::POS, 0)] = 1e-3;
+        k[(ix::VEL, 0)] = 0.1;
+        w[(ix::VEL, 0)] = 4e-4;
+        assert!(!breaks_a_variance(&p, &k, &w));
+        let mut q = p;
+        subtract_symmetric_product(&mut q, &k, &w);
+        assert!(q.diagonal().iter().all(|v| *v >= 0.0));
+        // 1e-3 - 2 * 0.3 * 1.7e-2 < 0 for position x.
+        w[(ix::POS, 0)] = 1.7e-2;
+        assert!(breaks_a_variance(&p, &k, &w));
+        let mut q = p;
+        subtract_symmetric_product(&mut q, &k, &w);
+        assert!(q[(ix::POS, ix::POS)] < 0.0);
+
+        // Through the update: a measurement of x whose noise is negative, so the innovation
+        // variance is far below what x's variance alone gives (S = 0.0025 - 0.002).
+        let mut f = Ekf::new(EkfConfig::default());
+        let before = f;
+        let mut h = SMatrix::<f32, 1, N>::zeros();
+        h[(0, ix::POS)] = 1.0;
+        let r = SMatrix::<f32, 1, 1>::new(-0.002);
+        let out = f.update(SVector::<f32, 1>::new(0.001), h, r);
+        assert_eq!(out, Outcome::Invalid);
+        assert_eq!(f, before);
+        assert!(f.is_valid());
     }
 
     #[test]
