@@ -72,8 +72,8 @@ impl<const N: usize> Onboard<N> {
         let pose = Pose2::new(e.position_m[0], e.position_m[1], e.yaw_rad);
         let prior = self.pose_at_last_scan.map(|before| before.between(pose));
         self.pose_at_last_scan = Some(pose);
-        // The height estimate is of the vehicle, not the lidar: the floor test's height
-        // tolerance covers the mounting.
+        // The height estimate is of the vehicle; the lidar sits a little above it, which only
+        // makes the floor test stricter.
         let plane = ScanPlane {
             roll_rad: e.roll_rad,
             pitch_rad: e.pitch_rad,
