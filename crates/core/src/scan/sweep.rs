@@ -143,7 +143,7 @@ mod tests {
         };
         let scan = smeared(motion.velocity_m_s, motion.yaw_rate_rad_s);
         let mut leveller = Leveller::<360>::default();
-        let out = leveller.level(&scan, 0.0, 0.0, motion);
+        let out = leveller.level(&scan, ScanPlane::LEVEL, motion);
         let mut order = crate::scan::AngularOrder::default();
         let kept: usize = out
             .beams()
