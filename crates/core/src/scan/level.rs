@@ -295,8 +295,9 @@ mod tests {
         scan.push(Beam::new(0.0, floor_ahead)).unwrap();
         // A wall 2 m ahead: met 0.52 m below the plane, well above the floor.
         scan.push(Beam::new(0.0, 2.0 / cosf(pitch))).unwrap();
-        scan.push(Beam::new(core::f32::consts::PI, 3.0)).unwrap();
+        // In bearing order, as a revolution comes (a beam out of order is dropped).
         scan.push(Beam::new(FRAC_PI_2, 6.0)).unwrap();
+        scan.push(Beam::new(core::f32::consts::PI, 3.0)).unwrap();
         let mut leveller = Leveller::default();
         let b = leveller.level(&scan, plane, SweepMotion::default()).beams();
         assert!(!b[0].valid, "{:?}", b[0]);
