@@ -99,8 +99,8 @@ pub struct CompanionLog {
     pub poses: Vec<(f64, Pose2)>,
     /// Revolutions whose scan match failed (the pose was predicted).
     pub predicted: usize,
-    /// Time between revolutions whose scan match saw a degenerate direction (the pose fix was
-    /// unobserved along it), summed, s.
+    /// Time flown between revolutions whose scan match saw a degenerate direction (the pose fix
+    /// was unobserved along it), summed, s.
     pub degenerate_s: f64,
     /// Map corrections that moved the pose (reset counter bumps).
     pub resets: usize,
@@ -305,19 +305,21 @@ impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
             pose: Some(self.fix(t_s, &at)),
             ..CompanionMessages::default()
         };
+        let mode = flight.final_mode();
         {
             let mut log = self.log.borrow_mut();
             log.poses.push((t_s, at.pose));
             log.predicted += usize::from(at.predicted);
-            if at
-                .observed
-                .is_some_and(|o| o.degenerate_direction.is_some())
+            let airborne = !matches!(mode, FlightMode::Disarmed | FlightMode::Killed);
+            if airborne
+                && at
+                    .observed
+                    .is_some_and(|o| o.degenerate_direction.is_some())
             {
                 log.degenerate_s += self.last_t_s.map_or(0.0, |t| t_s - t);
             }
         }
         self.last = Some(at);
-        let mode = flight.final_mode();
         if matches!(mode, FlightMode::Land | FlightMode::Killed)
             || (mode == FlightMode::Disarmed && self.phase != Phase::Waiting)
         {
