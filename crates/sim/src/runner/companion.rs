@@ -176,7 +176,7 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
             t_s,
             position_m: [at.pose.x, at.pose.y],
             yaw_rad: at.pose.theta,
-            covariance: fix_covariance(at.observed.as_ref()),
+            covariance: fix_covariance(at.observed.and_then(|o| o.degenerate_direction)),
             quality_pct: Some(if at.predicted {
                 QUALITY_PREDICTED
             } else {
