@@ -275,7 +275,12 @@ pub struct PoseFix {
     pub position_m: [f32; 2],
     /// Heading in the map frame, counter-clockwise from map x (rad).
     pub yaw_rad: f32,
-    /// Covariance of (x, y, yaw); units m^2, m*rad, rad^2. Row-major, symmetric.
+    /// Covariance of (x, y, yaw); units m^2, m*rad, rad^2. Row-major, symmetric. A position
+    /// direction the companion did not observe (a featureless corridor's axis) is said by a
+    /// variance along it beyond the autopilot's bound (`PoseFixConfig::max_position_std_m`):
+    /// the fix is then fused across it only. Keep that variance moderate (100 m^2 says it): in
+    /// f32 a covariance a million times wider one way than the other is no longer positive
+    /// definite once rotated, and is refused.
     pub covariance: [[f32; 3]; 3],
     /// Match quality 0 (unknown) to 100 (best); `None` when the SLAM is lost (MAVLink -1).
     pub quality_pct: Option<u8>,

@@ -10,6 +10,7 @@ use plumbline_sim::world::World;
 
 const CLOSED_ROOM: &str = include_str!("../worlds/explore/closed-room.world");
 const NARROW_GAP: &str = include_str!("../worlds/explore/narrow-gap.world");
+const LONG_CORRIDOR: &str = include_str!("../worlds/explore/long-corridor.world");
 
 /// Keeps the true states.
 #[derive(Default)]
@@ -128,4 +129,25 @@ fn a_person_walking_across_the_room_causes_no_collision() {
     let e = report.score.explore.as_ref().unwrap();
     assert_eq!(e.collisions, 0, "{e:?}");
     assert!(e.min_clearance_m >= 0.35, "{e:?}");
+}
+
+#[test]
+fn a_featureless_corridor_is_reported_degenerate_and_never_flown_to_its_end() {
+    // 40 m of smooth walls seen by a 4 m lidar: the SLAM cannot tell how far along it is. Its
+    // pose fixes say so, the estimate is not pinned to its guess, and the vehicle lands when
+    // it no longer knows where it is instead of running down the corridor into the far wall
+    // (x = 46 m) at whatever speed the unobserved axis reached.
+    let (report, states) = explore(
+        World::parse(LONG_CORRIDOR).unwrap(),
+        1,
+        60.0,
+        Strategy::Frontier,
+    );
+    let e = report.score.explore.as_ref().unwrap();
+    let log = &report.exploration.as_ref().unwrap().companion;
+    assert!(log.degenerate_s > 5.0, "{log:?}");
+    assert_eq!(e.collisions, 0, "{e:?}");
+    assert!(e.landed, "{e:?}");
+    let farthest = states.iter().map(|s| s.position.x).fold(f64::MIN, f64::max);
+    assert!(farthest < 15.0, "flew to x = {farthest} m");
 }

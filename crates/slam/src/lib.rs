@@ -13,10 +13,12 @@ pub mod guard;
 pub mod keyframe;
 pub mod loops;
 pub mod map_files;
+pub mod observed;
 pub mod slam;
 pub mod tracker;
 pub mod worker;
 
 pub use config::{EdgeNoise, GuardConfig, LoopConfig, SlamConfig};
+pub use observed::Observed;
 pub use slam::{Finished, ScanPose, Slam, TrackingStats};
 pub use tracker::{local_map_cells, ConfigError};

@@ -8,6 +8,7 @@
 use crate::backend::{Backend, BackendStats};
 use crate::config::SlamConfig;
 use crate::guard::Guarded;
+use crate::observed::Observed;
 use crate::tracker::{ConfigError, Tracker};
 use crate::worker::Worker;
 use plumbline_core::geom::Pose2;
@@ -26,6 +27,10 @@ pub struct ScanPose {
     pub new_keyframe: bool,
     /// The match failed and the pose is a prediction.
     pub predicted: bool,
+    /// What this scan's match against its keyframe observed, in the map frame's axes: the
+    /// covariance and the direction it could not see (a corridor's axis). `None` when nothing
+    /// was matched (the first scan, a predicted one).
+    pub observed: Option<Observed>,
 }
 
 /// Counts of the scan path for the summary.
@@ -115,15 +120,21 @@ impl<'m, const N: usize> Slam<'m, N> {
                 pose: tracked.pose,
                 new_keyframe,
                 predicted: tracked.predicted,
+                observed: tracked.observed,
             };
         };
-        let relative = self.keyframe_tracking[anchor].between(tracked.pose);
+        let tracking = self.keyframe_tracking[anchor];
+        let relative = tracking.between(tracked.pose);
+        let map = self.current_pose(anchor);
+        // The map frame is the tracker's turned by what the backend did to the anchor.
+        let turn = map.theta - tracking.theta;
         ScanPose {
             keyframe: Some(anchor),
             relative,
-            pose: self.current_pose(anchor).compose(relative),
+            pose: map.compose(relative),
             new_keyframe,
             predicted: tracked.predicted,
+            observed: tracked.observed.map(|o| o.rotated(turn)),
         }
     }
 

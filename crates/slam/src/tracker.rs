@@ -5,6 +5,7 @@
 use crate::config::SlamConfig;
 use crate::guard::{Guarded, GuessGuard};
 use crate::keyframe::Keyframe;
+use crate::observed::Observed;
 use plumbline_core::geom::Pose2;
 use plumbline_core::matching::local_map::{LineMap, MapCell, MapUse, MappedOdometry};
 use plumbline_core::matching::OdometryStep;
@@ -19,6 +20,9 @@ pub struct Tracked {
     pub keyframe: Option<Keyframe>,
     /// The match failed: the pose is a prediction.
     pub predicted: bool,
+    /// What the scan's match observed, in the tracker frame's axes; `None` when nothing was
+    /// matched (the first scan, a prediction).
+    pub observed: Option<Observed>,
     pub guess: Guarded,
 }
 
@@ -72,7 +76,15 @@ impl<'m, const N: usize> Tracker<'m, N> {
     /// source (wheel odometry), if any.
     pub fn track(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> Tracked {
         let (guess, prior) = self.guarded_prior(scan, prior);
+        // The match is made in the axes of the keyframe it is made against.
+        let reference_heading = self.keyframe.as_ref().map(|k| k.tracking_pose.theta);
         let step = self.odometry.update(scan, prior);
+        let observed = match (step.step, reference_heading) {
+            (OdometryStep::Matched { result, .. }, Some(heading)) => {
+                Some(Observed::from_match(&result).rotated(heading))
+            }
+            _ => None,
+        };
         let pose = self.odometry.pose();
         self.last_motion = self.last_pose.between(pose);
         self.last_pose = pose;
@@ -91,6 +103,7 @@ impl<'m, const N: usize> Tracker<'m, N> {
             pose,
             keyframe,
             predicted: matches!(step.step, OdometryStep::Predicted { .. }),
+            observed,
             guess,
         }
     }

@@ -45,6 +45,7 @@ pub fn extend_summary(summary: &mut Value, score: &ExploreScore, exploration: &E
         "explore_end": score.explore_end.map(|e| end_name(e.1)),
         "path_home_m": c.path_home_m,
         "slam_predicted_scans": c.predicted,
+        "slam_degenerate_s": c.degenerate_s,
         "map_corrections": c.resets,
     });
     if let (Some(map), Value::Object(extra)) = (summary.as_object_mut(), extra) {

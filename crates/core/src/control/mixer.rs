@@ -99,8 +99,10 @@ impl Mixer {
         }
         let lowest = diff.iter().fold(f32::INFINITY, |m, &v| m.min(v));
         let highest = diff.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v));
-        // Attitude wins: the collective moves to wherever the differential fits in [0, 1].
-        let collective = collective_request.clamp(-lowest, 1.0 - highest);
+        // Attitude wins: the collective moves to wherever the differential fits in [0, 1]. When
+        // the differential spans the whole range, rounding can leave -lowest a hair above
+        // 1 - highest; `clamp` would panic on that empty interval, max-then-min takes its top.
+        let collective = collective_request.max(-lowest).min(1.0 - highest);
         cut |= collective != collective_request;
 
         let mut thrust_norm = [0.0; 4];
@@ -296,5 +298,33 @@ mod tests {
         let mixed = m.mix(d(f32::NAN, f32::INFINITY, 0.1, f32::NEG_INFINITY));
         assert!(mixed.motors.throttle_norm.iter().all(|x| x.is_finite()));
         assert!(mixed.saturated);
+    }
+
+    /// A differential that spans the motors' whole range once yaw has given way: rounding put
+    /// the lower collective bound above the upper one and the mixer panicked.
+    #[test]
+    fn a_full_span_differential_rounded_past_the_range_still_mixes() {
+        let m = Mixer::new(FrameKind::X);
+        let mixed = m.mix(d(-0.9015677, 0.64702225, 0.4211114, -0.4325813));
+        assert!(mixed.saturated);
+        assert!(mixed.thrust_norm.iter().all(|&f| (0.0..=1.0).contains(&f)));
+    }
+
+    proptest::proptest! {
+        /// Any finite demand, however far out of range, mixes to thrusts in [0, 1]: the mixer
+        /// runs every control step and must never panic.
+        #[test]
+        fn any_finite_demand_mixes_into_the_motors_range(
+            plus in proptest::bool::ANY,
+            collective in -3.0f32..3.0,
+            roll in -3.0f32..3.0,
+            pitch in -3.0f32..3.0,
+            yaw in -3.0f32..3.0,
+        ) {
+            let m = Mixer::new(if plus { FrameKind::Plus } else { FrameKind::X });
+            let mixed = m.mix(d(collective, roll, pitch, yaw));
+            proptest::prop_assert!(mixed.thrust_norm.iter().all(|&f| (0.0..=1.0).contains(&f)));
+            proptest::prop_assert!(mixed.motors.throttle_norm.iter().all(|&f| (0.0..=1.0).contains(&f)));
+        }
     }
 }

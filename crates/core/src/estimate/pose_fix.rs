@@ -19,23 +19,34 @@
 //! on it would silently give up the map's correction of the odometry's drift, so a companion
 //! must bump `reset_counter` whenever its pose jumps.
 //!
+//! A fix is fused with its full covariance, gated by its Mahalanobis distance under it. A SLAM
+//! in a featureless corridor knows its position across the corridor but not along it, and says
+//! so by a position covariance that is wide along the axis only: wider than
+//! `max_position_std_m` in one direction, the fix is fused across that direction (and in
+//! heading) only, so the odometry and the IMU keep the axis, and a made-up position along it
+//! never pins the estimate. The onboard scan matcher's degenerate axis is handled the same way
+//! ([`super::scan_match`]).
+//!
 //! Refused without touching the filter, and counted: a non-finite value, a covariance that is
-//! not symmetric positive definite or whose one-sigma exceeds the configured bounds, a lost or
-//! low-quality fix, and a fix older than `max_latency_s`.
+//! not symmetric positive definite or that is wider than the configured bounds in heading or
+//! in every direction of position, a lost or low-quality fix, and a fix older than
+//! `max_latency_s`.
 
 use super::ekf::{ix, Ekf, Outcome, N};
 use crate::geom::{normalize_angle, Pose2, Vec2};
+use crate::matching::linalg::sym2_eigen;
 use crate::msgs::PoseFix;
 use libm::{cosf, sinf};
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use nalgebra::{Matrix2x3, Matrix3, SMatrix, Vector3};
 
 /// Settings of the companion pose fusion.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PoseFixConfig {
     /// Fixes of lower quality (0-100) are refused. 0 takes every fix that is not lost.
     pub min_quality_pct: u8,
-    /// Fixes whose position one-sigma (m) or heading one-sigma (rad) exceeds these are refused
-    /// as absurd: a map pose that unsure says nothing the odometry does not.
+    /// Fixes whose heading one-sigma (rad) exceeds this, or whose position one-sigma (m)
+    /// exceeds this in every direction, are refused: a map pose that unsure says nothing the
+    /// odometry does not. Wider in one direction only, the position along it is not fused.
     pub max_position_std_m: f32,
     pub max_yaw_std_rad: f32,
     /// Factor on the fix's covariance: the SLAM and the onboard odometry match the same scans,
@@ -74,6 +85,9 @@ pub struct PoseFixCounters {
     pub late: u32,
     /// Times the map frame was (re-)anchored: the first fix and each `reset_counter` change.
     pub anchors: u32,
+    /// Fixes whose position went to the EKF across one direction only, the other being wider
+    /// than `max_position_std_m` (a corridor's axis); also counted as accepted or rejected.
+    pub one_direction: u32,
 }
 
 /// What one fix did.
@@ -117,7 +131,7 @@ impl CompanionFrame {
         age_s: f32,
     ) -> FixOutcome {
         let count = |n: &mut u32| *n = n.saturating_add(1);
-        let Some(covariance) = well_formed(c, fix) else {
+        let Some((covariance, measured)) = well_formed(c, fix) else {
             count(&mut self.counters.invalid);
             return FixOutcome::Refused;
         };
@@ -151,7 +165,14 @@ impl CompanionFrame {
         let (s, co) = (sinf(self.map_to_world.theta), cosf(self.map_to_world.theta));
         let rotate = Matrix3::new(co, -s, 0.0, s, co, 0.0, 0.0, 0.0, 1.0);
         let r = rotate * covariance * rotate.transpose() * c.covariance_scale;
-        let outcome = ekf.fuse_pose(world, r, latency_s);
+        let outcome = match measured {
+            Measured::Pose => ekf.fuse_pose(world, r, latency_s),
+            Measured::Across(across) => {
+                count(&mut self.counters.one_direction);
+                let across = self.map_to_world.rotate(across);
+                ekf.fuse_pose_across(world, r, across, latency_s)
+            }
+        };
         match outcome {
             Outcome::Accepted => count(&mut self.counters.accepted),
             Outcome::Rejected => count(&mut self.counters.rejected),
@@ -184,18 +205,38 @@ impl CompanionFrame {
     }
 }
 
-/// The fix's covariance if every value is finite and it is symmetric positive definite within
-/// the configured one-sigma bounds.
-fn well_formed(c: &PoseFixConfig, fix: &PoseFix) -> Option<Matrix3<f32>> {
+/// What of its position a well-formed fix measures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Measured {
+    /// Both directions.
+    Pose,
+    /// Only along this unit direction (map frame): across it the fix is wider than the bound.
+    Across(Vec2),
+}
+
+/// The fix's covariance and what it measures, if every value is finite, the covariance is
+/// symmetric positive definite, its heading within the bound and its position within the bound
+/// in at least one direction.
+fn well_formed(c: &PoseFixConfig, fix: &PoseFix) -> Option<(Matrix3<f32>, Measured)> {
     let m = Matrix3::from_fn(|i, j| fix.covariance[i][j]);
     let finite = m.iter().all(|v| v.is_finite())
         && fix.position_m.iter().all(|v| v.is_finite())
         && fix.yaw_rad.is_finite();
-    let (max_p, max_y) = (c.max_position_std_m, c.max_yaw_std_rad);
-    let bounded =
-        m[(0, 0)] <= max_p * max_p && m[(1, 1)] <= max_p * max_p && m[(2, 2)] <= max_y * max_y;
     let symmetric = (m - m.transpose()).abs().max() <= 1e-6 * m.abs().max();
-    (finite && bounded && symmetric && m.cholesky().is_some()).then_some(m)
+    if !(finite && symmetric && m.cholesky().is_some()) {
+        return None;
+    }
+    let (max_p2, max_y) = (
+        c.max_position_std_m * c.max_position_std_m,
+        c.max_yaw_std_rad,
+    );
+    let (widest, narrowest, narrow) = sym2_eigen(m[(0, 0)], m[(0, 1)], m[(1, 1)]);
+    let measured = if widest <= max_p2 {
+        Measured::Pose
+    } else {
+        Measured::Across(narrow)
+    };
+    (narrowest <= max_p2 && m[(2, 2)] <= max_y * max_y).then_some((m, measured))
 }
 
 impl Ekf {
@@ -203,6 +244,41 @@ impl Ekf {
     /// of (x, y, yaw). The position is compared with the current one taken back along the
     /// velocity, as for the scan matcher's late revolutions.
     pub fn fuse_pose(&mut self, world: Pose2, r: Matrix3<f32>, latency_s: f32) -> Outcome {
+        let (residual, h) = self.pose_residual(world, latency_s);
+        self.update(residual, h, r)
+    }
+
+    /// [`Self::fuse_pose`] of the position along the unit world direction `across` and the
+    /// heading only: the position perpendicular to `across` is left as it is.
+    pub fn fuse_pose_across(
+        &mut self,
+        world: Pose2,
+        r: Matrix3<f32>,
+        across: Vec2,
+        latency_s: f32,
+    ) -> Outcome {
+        let (residual, h) = self.pose_residual(world, latency_s);
+        self.update_across(residual, h, r, across)
+    }
+
+    /// The update of a pose measurement (x, y, heading) with the position taken along the unit
+    /// direction `across` only: rows `(acrossᵀ, 0)` and `(0, 0, 1)` of the residual, the model
+    /// and the covariance (the marginal of the kept components). Nothing is said along the
+    /// perpendicular, so its variance keeps growing with the prediction instead of being
+    /// pinned by a value the measurement did not observe.
+    pub(super) fn update_across(
+        &mut self,
+        residual: Vector3<f32>,
+        h: SMatrix<f32, 3, N>,
+        r: Matrix3<f32>,
+        across: Vec2,
+    ) -> Outcome {
+        let keep = Matrix2x3::new(across.x, across.y, 0.0, 0.0, 0.0, 1.0);
+        self.update(keep * residual, keep * h, keep * r * keep.transpose())
+    }
+
+    /// The residual of a world pose whose time is `latency_s` before now, and its model.
+    fn pose_residual(&self, world: Pose2, latency_s: f32) -> (Vector3<f32>, SMatrix<f32, 3, N>) {
         let l = latency_s;
         let predicted = Vector3::new(
             self.x[ix::POS] - l * self.x[ix::VEL],
@@ -220,7 +296,7 @@ impl Ekf {
             world.y - predicted.y,
             normalize_angle(world.theta - predicted.z),
         );
-        self.update(residual, h, r)
+        (residual, h)
     }
 }
 
@@ -316,7 +392,8 @@ mod tests {
         let mut bad = [good; 9];
         bad[0].position_m[0] = f32::NAN;
         bad[1].covariance[0][0] = f32::NAN;
-        bad[2].covariance[1][1] = 1e6; // absurdly unsure
+        bad[2].covariance[0][0] = 1e6; // absurdly unsure in every direction
+        bad[2].covariance[1][1] = 1e6;
         bad[3].covariance[2][2] = -1e-4; // not a covariance
         bad[4].covariance[0][1] = 5e-4; // not symmetric
         bad[5].covariance = [[1e-4, 2e-4, 0.0], [2e-4, 1e-4, 0.0], [0.0, 0.0, 1e-4]]; // indefinite
@@ -335,5 +412,84 @@ mod tests {
         assert_eq!((*ekf.state(), *ekf.covariance()), before);
         let c = frame.counters();
         assert_eq!((c.invalid, c.low_quality, c.late, c.accepted), (7, 2, 3, 0));
+    }
+
+    /// A fix known to 3 cm across the unit direction `along` and unobserved (10 m) along it,
+    /// with the heading known to 0.01 rad: what a SLAM in a corridor sends.
+    fn corridor_fix(x: f32, y: f32, along: Vec2) -> PoseFix {
+        let (wide, narrow) = (100.0, 1.0e-3);
+        let (u, v) = ([along.x, along.y], [-along.y, along.x]);
+        let cov = |i: usize, j: usize| wide * u[i] * u[j] + narrow * v[i] * v[j];
+        let mut f = fix(x, y, 0.0, 0);
+        f.covariance = [
+            [cov(0, 0), cov(0, 1), 0.0],
+            [cov(1, 0), cov(1, 1), 0.0],
+            [0.0, 0.0, 1e-4],
+        ];
+        f
+    }
+
+    #[test]
+    fn a_fix_unobserved_along_a_corridor_corrects_only_across_it() {
+        let along = Vec2::new(cosf(0.5), sinf(0.5));
+        let across = along.perp();
+        // The fix puts the vehicle 3 m down the corridor and 5 cm to the side.
+        let off = along * 3.0 + across * 0.05;
+        let mut ekf = Ekf::new(EkfConfig::default());
+        let mut frame = CompanionFrame::default();
+        fuse(&mut frame, &mut ekf, &fix(0.0, 0.0, 0.0, 0));
+        let out = fuse(&mut frame, &mut ekf, &corridor_fix(off.x, off.y, along));
+        assert_eq!(out, FixOutcome::Fused(Outcome::Accepted));
+        let x = ekf.state();
+        let moved = Vec2::new(x[ix::POS], x[ix::POS + 1]);
+        // Across: pulled by P / (P + 4 R) = 0.0025 / 0.0065 of the 5 cm; along: not at all.
+        let expected = 0.05 * 0.0025 / (0.0025 + 4.0 * 1e-3);
+        assert!((moved.dot(across) - expected).abs() < 2e-4, "{moved:?}");
+        assert!(moved.dot(along).abs() < 1e-5, "{moved:?}");
+        // The variance along the corridor is left as it was; across it shrank.
+        let p = ekf.covariance();
+        let var = |u: Vec2| {
+            let (a, b, c) = (
+                p[(ix::POS, ix::POS)],
+                p[(ix::POS, ix::POS + 1)],
+                p[(ix::POS + 1, ix::POS + 1)],
+            );
+            u.x * u.x * a + 2.0 * u.x * u.y * b + u.y * u.y * c
+        };
+        assert!((var(along) - 0.0025).abs() < 1e-6, "{p}");
+        assert!(var(across) < 0.0016, "{p}");
+        assert_eq!(frame.counters().one_direction, 1);
+        // The same fix believed in every direction is 3 m off: the gate refuses it.
+        let mut ekf = Ekf::new(EkfConfig::default());
+        let mut frame = CompanionFrame::default();
+        fuse(&mut frame, &mut ekf, &fix(0.0, 0.0, 0.0, 0));
+        let pinned = fuse(&mut frame, &mut ekf, &fix(off.x, off.y, 0.0, 0));
+        assert_eq!(pinned, FixOutcome::Fused(Outcome::Rejected));
+    }
+
+    #[test]
+    fn the_gate_weighs_a_corridor_fix_by_its_full_covariance() {
+        // 0.5 m across a corridor known to 3 cm is far outside the gate, whatever along.
+        let along = Vec2::new(0.0, 1.0);
+        let mut ekf = Ekf::new(EkfConfig::default());
+        let mut frame = CompanionFrame::default();
+        fuse(&mut frame, &mut ekf, &fix(0.0, 0.0, 0.0, 0));
+        let out = fuse(&mut frame, &mut ekf, &corridor_fix(0.5, 0.0, along));
+        assert_eq!(out, FixOutcome::Fused(Outcome::Rejected));
+        assert_eq!(ekf.state()[ix::POS], 0.0);
+    }
+
+    #[test]
+    fn a_corridor_fix_is_well_formed_at_any_heading_of_the_corridor() {
+        let c = PoseFixConfig::default();
+        for k in 0..16 {
+            let a = k as f32 * core::f32::consts::PI / 16.0;
+            let along = Vec2::new(cosf(a), sinf(a));
+            let f = corridor_fix(0.0, 0.0, along);
+            let Some((_, Measured::Across(d))) = well_formed(&c, &f) else {
+                panic!("{a}: {:?}", well_formed(&c, &f));
+            };
+            assert!(d.dot(along).abs() < 1e-3, "{a}: {d:?}");
+        }
     }
 }

@@ -12,10 +12,10 @@
 //! prediction instead of being pinned by a made-up value.
 
 use super::ekf::{ix, Ekf, Outcome, N};
-use crate::geom::normalize_angle;
+use crate::geom::{normalize_angle, Vec2};
 use crate::msgs::{ScanMatchDelta, ScanMatchStatus};
 use libm::{cosf, sinf, sqrtf};
-use nalgebra::{Matrix2x3, Matrix3, SMatrix, Vector2, Vector3};
+use nalgebra::{Matrix3, SMatrix, Vector2, Vector3};
 
 impl Ekf {
     /// Fuses one scan-matcher result whose pose belongs `latency_s` before now. `ReferenceOnly`
@@ -93,13 +93,7 @@ impl Ekf {
                 if !(n.is_finite() && n > 1e-3) {
                     return Outcome::Invalid;
                 }
-                // Keep the direction across the axis and the rotation: rows (n^T, 0), (0, 0, 1).
-                let across = Matrix2x3::new(-ay / n, ax / n, 0.0, 0.0, 0.0, 1.0);
-                self.update(
-                    across * residual,
-                    across * h,
-                    across * c * across.transpose(),
-                )
+                self.update_across(residual, h, c, Vec2::new(-ay / n, ax / n))
             }
         }
     }

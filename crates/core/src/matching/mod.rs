@@ -11,7 +11,7 @@ mod fit_lanes;
 mod icl_paper;
 mod line_sums;
 mod line_fit;
-mod linalg;
+pub(crate) mod linalg;
 pub mod local_map;
 mod metrics;
 mod nearest;

@@ -9,6 +9,7 @@
 //! then say so and fly the planned path home; the autopilot lands when it is there. Everything
 //! runs inline (the SLAM backend too), so a run is a function of its seed.
 
+use super::fix_covariance::fix_covariance;
 use super::onboard_link::{
     CompanionComputer, FlightLog, OnboardLink, WithCompanion, LARGE_SCAN_BEAMS, XV11_BEAMS,
 };
@@ -43,10 +44,6 @@ const HOME_LOOKAHEAD_M: f32 = 1.0;
 /// Fastest turn the companion asks for, rad/s: the scan matcher on board loses a slow lidar
 /// when the heading sweeps much faster (0.5 rad/s is 3 degrees a URG-04LX revolution).
 const YAW_RATE_RAD_S: f32 = 0.5;
-/// One-sigma uncertainty sent with each SLAM pose: the SLAM reports none, and these are its
-/// measured errors on the simulated surveys (a few centimetres, about half a degree).
-const FIX_STD_M: f32 = 0.1;
-const FIX_STD_RAD: f32 = 0.03;
 /// Quality of a matched pose and of a predicted one (the autopilot refuses below 20).
 const QUALITY_MATCHED: u8 = 80;
 const QUALITY_PREDICTED: u8 = 10;
@@ -102,6 +99,9 @@ pub struct CompanionLog {
     pub poses: Vec<(f64, Pose2)>,
     /// Revolutions whose scan match failed (the pose was predicted).
     pub predicted: usize,
+    /// Time flown between revolutions whose scan match saw a degenerate direction (the pose fix
+    /// was unobserved along it), summed, s.
+    pub degenerate_s: f64,
     /// Map corrections that moved the pose (reset counter bumps).
     pub resets: usize,
     /// Revolutions the live map could not take in.
@@ -172,12 +172,11 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
                 }
             }
         }
-        let (s2, r2) = (FIX_STD_M * FIX_STD_M, FIX_STD_RAD * FIX_STD_RAD);
         PoseFix {
             t_s,
             position_m: [at.pose.x, at.pose.y],
             yaw_rad: at.pose.theta,
-            covariance: [[s2, 0.0, 0.0], [0.0, s2, 0.0], [0.0, 0.0, r2]],
+            covariance: fix_covariance(at.observed.and_then(|o| o.degenerate_direction)),
             quality_pct: Some(if at.predicted {
                 QUALITY_PREDICTED
             } else {
@@ -306,13 +305,21 @@ impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
             pose: Some(self.fix(t_s, &at)),
             ..CompanionMessages::default()
         };
+        let mode = flight.final_mode();
         {
             let mut log = self.log.borrow_mut();
             log.poses.push((t_s, at.pose));
             log.predicted += usize::from(at.predicted);
+            let airborne = !matches!(mode, FlightMode::Disarmed | FlightMode::Killed);
+            if airborne
+                && at
+                    .observed
+                    .is_some_and(|o| o.degenerate_direction.is_some())
+            {
+                log.degenerate_s += self.last_t_s.map_or(0.0, |t| t_s - t);
+            }
         }
         self.last = Some(at);
-        let mode = flight.final_mode();
         if matches!(mode, FlightMode::Land | FlightMode::Killed)
             || (mode == FlightMode::Disarmed && self.phase != Phase::Waiting)
         {

@@ -11,6 +11,7 @@
 //! [`run`] is the loop; one step of it is `lockstep`'s, with the run's state between steps.
 
 mod config;
+mod fix_covariance;
 mod lockstep;
 pub mod companion;
 pub mod mission;

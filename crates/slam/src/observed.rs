@@ -1,0 +1,92 @@
+//! What one scan's match observed: the covariance of its pose relative to its keyframe and the
+//! direction it could not see, turned from the keyframe's axes into another frame's.
+//!
+//! The scan matcher ([`plumbline_core::matching`]) already derives both from the matched
+//! geometry: the covariance is the residual variance times the inverse of the Gauss-Newton
+//! information of the point-to-line residuals at the solution, and a translation direction is
+//! degenerate when its information (rotation left free) is below `MatchConfig::degenerate_ratio`
+//! (0.02 by default) of the best-constrained direction's. Along that direction the variance is
+//! [`plumbline_core::matching::UNOBSERVED_VARIANCE`]: the pose there is the motion guess, not a
+//! measurement. Nothing here changes the estimate; it only reports.
+
+use plumbline_core::geom::{Pose2, Vec2};
+use plumbline_core::matching::MatchResult;
+
+/// The match of one scan against its keyframe, in the axes of some frame (see where it is
+/// returned for which).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Observed {
+    /// Covariance of (x, y, heading) in m², m·rad and rad²; row-major, symmetric. It is what
+    /// this scan's match measured relative to its keyframe; the keyframe's own uncertainty in
+    /// the map is not in it.
+    pub covariance: [[f32; 3]; 3],
+    /// Unit direction along which the match saw nothing (a featureless corridor's axis); the
+    /// variance along it is unobserved. `None` when both directions are constrained.
+    pub degenerate_direction: Option<Vec2>,
+}
+
+impl Observed {
+    /// The match's report, in the axes of its reference (keyframe) scan.
+    pub fn from_match(result: &MatchResult) -> Self {
+        Self {
+            covariance: result.covariance,
+            degenerate_direction: result.quality.degenerate_direction,
+        }
+    }
+
+    /// The same, with its axes turned by `angle_rad`: `B Σ Bᵀ` with `B = diag(R(angle), 1)`.
+    pub fn rotated(&self, angle_rad: f32) -> Self {
+        let (s, c) = angle_rad.sin_cos();
+        let b = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+        let m = &self.covariance;
+        let bm: [[f32; 3]; 3] = core::array::from_fn(|i| {
+            core::array::from_fn(|j| (0..3).map(|k| b[i][k] * m[k][j]).sum())
+        });
+        // One triangle, mirrored, so the result is exactly symmetric.
+        let entry = |i: usize, j: usize| -> f32 {
+            let (i, j) = (i.min(j), i.max(j));
+            (0..3).map(|k| bm[i][k] * b[j][k]).sum()
+        };
+        let covariance = core::array::from_fn(|i| core::array::from_fn(|j| entry(i, j)));
+        let turn = Pose2::new(0.0, 0.0, angle_rad);
+        Self {
+            covariance,
+            degenerate_direction: self.degenerate_direction.map(|d| turn.rotate(d)),
+        }
+    }
+
+    /// Variance of the position along the unit direction `u`, m².
+    pub fn variance_along(&self, u: Vec2) -> f32 {
+        let m = &self.covariance;
+        u.x * u.x * m[0][0] + 2.0 * u.x * u.y * m[0][1] + u.y * u.y * m[1][1]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn turning_the_axes_turns_the_variances_and_the_direction_and_keeps_the_heading() {
+        // 1 cm across x, 1 m along y, a degenerate y, heading variance with no correlation.
+        let o = Observed {
+            covariance: [[1e-4, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 4e-6]],
+            degenerate_direction: Some(Vec2::new(0.0, 1.0)),
+        };
+        let q = core::f32::consts::FRAC_PI_2;
+        let t = o.rotated(q);
+        // A quarter turn: y's variance is now x's.
+        assert!((t.covariance[0][0] - 1.0).abs() < 1e-6, "{t:?}");
+        assert!((t.covariance[1][1] - 1e-4).abs() < 1e-6, "{t:?}");
+        assert!(t.covariance[2][2] == 4e-6);
+        let d = t.degenerate_direction.unwrap();
+        assert!((d.x + 1.0).abs() < 1e-6 && d.y.abs() < 1e-6, "{d:?}");
+        // At 0.6 rad the variance along the turned direction is the original's along y.
+        let a = 0.6;
+        let t = o.rotated(a);
+        let along = t.degenerate_direction.unwrap();
+        assert!((t.variance_along(along) - 1.0).abs() < 1e-5);
+        assert!((t.variance_along(along.perp()) - 1e-4).abs() < 1e-5);
+        assert_eq!(t.covariance[0][1], t.covariance[1][0]);
+    }
+}
