@@ -335,9 +335,14 @@ fn bad_pose_fixes_are_refused_and_counted_in_flight() {
             c.send(i, v);
             if let Some(p) = &mut i.companion.pose {
                 k += 1;
+                // Not a number, and wider than the bounds in every direction of position (wide
+                // in one direction only is a corridor's fix, fused across it).
                 match k % 2 {
                     0 => p.covariance[0][0] = f32::NAN,
-                    _ => p.covariance[1][1] = 1e9,
+                    _ => {
+                        p.covariance[0][0] = 1e9;
+                        p.covariance[1][1] = 1e9;
+                    }
                 }
             }
         },
