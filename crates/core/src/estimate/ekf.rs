@@ -40,13 +40,7 @@ pub type Covariance = SMatrix<f32, N, N>;
 /// Noise, gating and validity settings of the EKF.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EkfConfig {
-    /// Initial one-sigma of position (m), velocity (m/s), yaw (rad). The estimate frame's
-    /// heading is the heading at power-up, so the yaw there is known exactly (0). Nothing
-    /// measures the heading against the room afterwards, only against cloned references that
-    /// inherit it, so an initial yaw variance is never taken back out: with 0.05 rad, updates
-    /// correlated with yaw (IMU acceleration against matched motion, drag) turned the yaw and
-    /// its reference together, and every later keyframe inherited the turn, which rotated the
-    /// flown path about the start (3 m square at 1 m/s: 0.02-0.09 m from the truth).
+    /// Initial one-sigma of position (m), velocity (m/s), yaw (rad).
     pub initial_std: [f32; 3],
     /// Initial one-sigma of accelerometer bias (m/s^2) and gyro bias (rad/s; z, and the error of
     /// the tilt filter's x/y estimate).
@@ -88,7 +82,7 @@ pub struct EkfConfig {
 impl Default for EkfConfig {
     fn default() -> Self {
         Self {
-            initial_std: [0.05, 0.05, 0.0],
+            initial_std: [0.05, 0.05, 0.05],
             initial_bias_std: [0.3, 0.01],
             initial_tilt_std_rad: 0.02,
             accel_noise_density: 0.15,
