@@ -72,7 +72,7 @@ pub fn pareto(
     ))?;
     if labels {
         floor
-            .label("still hover at nominal rotor speed")
+            .label("still hover of the flown vehicles (the floor)")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 15, y)], BLACK));
     }
     for c in [Controller::Pid, Controller::Mrac] {

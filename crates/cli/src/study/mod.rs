@@ -3,6 +3,7 @@
 
 mod energy;
 mod energy_plot;
+mod energy_table;
 mod paper;
 mod pareto;
 

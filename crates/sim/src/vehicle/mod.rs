@@ -10,9 +10,11 @@
 
 pub mod battery;
 pub mod dynamics;
+pub mod hover_excess;
 pub mod model_error;
 pub mod motors;
 pub mod power;
+pub mod still_hover;
 
 use crate::math::Vec3;
 use battery::BatteryParams;
