@@ -5,7 +5,7 @@
 //! the power breakdown beside seed 000 Fig. 12 go to `--out`.
 
 use super::pareto::{self, Point};
-use super::{energy_plot, energy_table};
+use super::{energy_plot, energy_table, excess_plot};
 use crate::numeric::{within, Range};
 use crate::plot::write_png;
 use crate::report::{print_summary, CliError, CliResult};
@@ -33,7 +33,7 @@ const ENERGY_SAVING: f64 = 0.1;
 
 #[derive(Args, Debug)]
 pub struct EnergyArgs {
-    /// Directory for energy.tsv, summary.json, pareto.png and power.png.
+    /// Directory for energy.tsv, summary.json, pareto.png, power.png and excess.png.
     #[arg(long)]
     pub out: PathBuf,
     /// Controllers to sweep, comma separated.
@@ -359,9 +359,10 @@ pub fn run(args: EnergyArgs) -> CliResult {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     std::fs::create_dir_all(&args.out)
         .map_err(|e| CliError(format!("--out {}: {e}", args.out.display())))?;
-    let (pareto_png, power_png) = (
+    let (pareto_png, power_png, excess_png) = (
         stage(&args.out, "pareto.png")?,
         stage(&args.out, "power.png")?,
+        stage(&args.out, "excess.png")?,
     );
     let runs = fly_all(&args, &settings, threads)?;
     let rows: Vec<Row> = settings
@@ -387,6 +388,9 @@ pub fn run(args: EnergyArgs) -> CliResult {
         .min_by(|&a, &b| points[a].energy_wh_min.total_cmp(&points[b].energy_wh_min))
         .map(|i| &rows[i]);
     write_png(power_png, |p| energy_plot::breakdown(p, &rows[0], lowest))?;
+    write_png(excess_png, |p| {
+        excess_plot::excess(p, &rows, ENERGY_SAVING * rows[0].hold_power_w)
+    })?;
     // Each controller's settings are contiguous, its default first (see `settings`).
     let per_controller: Vec<(&str, serde_json::Value, bool)> = rows
         .chunk_by(|a, b| a.setting.controller == b.setting.controller)

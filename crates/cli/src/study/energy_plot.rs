@@ -13,7 +13,7 @@ use std::path::Path;
 /// Seed 000 Fig. 12(a): motors 95 %, ESCs 4 %, flight controller 1 % of the measured power.
 const SEED_000_FIG_12A: [f64; 3] = [0.95, 0.04, 0.01];
 
-fn color(c: Controller) -> RGBColor {
+pub(super) fn color(c: Controller) -> RGBColor {
     match c {
         Controller::Mrac => RGBColor(200, 90, 20),
         _ => RGBColor(40, 90, 200),
@@ -115,7 +115,7 @@ pub fn pareto(
         }
     }
     if labels {
-        legend(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     }
     root.present()?;
     Ok(())
@@ -183,20 +183,23 @@ pub fn breakdown(path: &Path, default: &Row, lowest: Option<&Row>) -> Result<(),
         }
     }
     if labels {
-        legend(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     }
     root.present()?;
     Ok(())
 }
 
-type Chart<'a, 'b> =
+pub(super) type Chart<'a, 'b> =
     ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
-/// The series labels in the upper right corner, on a light box.
-fn legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<(), Box<dyn Error>> {
+/// The series labels in the `corner` where the data leave room, on a light box.
+pub(super) fn legend<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    corner: SeriesLabelPosition,
+) -> Result<(), Box<dyn Error>> {
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(corner)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()?;
@@ -205,7 +208,7 @@ fn legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<(), Box<dyn Error>> {
 
 /// The study charts' builder on `root`: their margin and, when text can be drawn (`labels`),
 /// the caption and room for the (x, y) axis labels; without fonts the plot keeps the space.
-fn titled<'a, 'b>(
+pub(super) fn titled<'a, 'b>(
     root: &'a DrawingArea<BitMapBackend<'b>, Shift>,
     labels: bool,
     caption: &str,

@@ -4,6 +4,7 @@
 mod energy;
 mod energy_plot;
 mod energy_table;
+mod excess_plot;
 mod paper;
 mod pareto;
 
