@@ -9,8 +9,8 @@
 //! - **fluctuation**: the total thrust varying about its mean; power is convex in it (∝ T^{3/2}),
 //!   so to second order this is 3/8 · Var(T)/T̄² of the collective power;
 //! - **tilt**: the thrust along body z exceeding its vertical part, T̄ against mean(T cos θ);
-//! - **vertical**: the mean vertical thrust differing from the weight (climb or sink over the
-//!   window, vertical drag);
+//! - **vertical**: the mean vertical thrust differing from the weight (vertical gusts dragging
+//!   on the vehicle, climb or sink over the window);
 //! - **sampling**: the energy-integrated mean against the mean of the samples (what the 50 Hz
 //!   samples miss of the 1 kHz power).
 
@@ -155,4 +155,112 @@ pub fn hover_excess(
         sampling_w: measured_w - sampled,
         predicted_w,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+    use crate::vehicle::dynamics::Dynamics;
+
+    /// Samples at 50 Hz of a body whose rotors all run at `scale(t)` times the still hover's
+    /// speeds, rolled by `roll(t)`, with the energy integrated from the sampled power.
+    fn flight(
+        p: &VehicleParams,
+        floor: &StillHover,
+        scale: impl Fn(f64) -> f64,
+        roll: impl Fn(f64) -> f64,
+    ) -> Vec<StateSample> {
+        let mut energy_wh = 0.0;
+        (0..=3000)
+            .map(|k| {
+                let t_s = k as f64 * 0.02;
+                let rotor_speed = floor.rotor_speed.map(|w| w * scale(t_s));
+                let power_w = power(p, &rotor_speed, &[0.0; 4]).total_w();
+                if k > 0 {
+                    energy_wh += power_w * 0.02 / 3600.0;
+                }
+                StateSample {
+                    t_s,
+                    position: Vec3::ZERO,
+                    reference: None,
+                    euler: [roll(t_s), 0.0, 0.0],
+                    battery_v: 12.0,
+                    power_w,
+                    energy_wh,
+                    rotor_speed,
+                    thrust_n: floor.weight_n * scale(t_s).powi(2),
+                }
+            })
+            .collect()
+    }
+
+    fn floor_of(p: &VehicleParams) -> StillHover {
+        StillHover::of(p, &Dynamics::new(p, [1.02, 0.99, 1.0, 1.01], 1e-3)).unwrap()
+    }
+
+    #[test]
+    fn a_still_hover_has_no_excess() {
+        let p = VehicleParams::f450();
+        let floor = floor_of(&p);
+        let x = hover_excess(&p, &floor, &flight(&p, &floor, |_| 1.0, |_| 0.0)).unwrap();
+        assert!(
+            x.measured_w.abs() < 1e-9 && x.predicted_w.abs() < 1e-9,
+            "{x:?}"
+        );
+        assert!(x.parts().iter().all(|(_, w)| w.abs() < 1e-9), "{x:?}");
+    }
+
+    #[test]
+    fn thrust_fluctuation_costs_three_eighths_of_its_relative_variance() {
+        let p = VehicleParams::f450();
+        let floor = floor_of(&p);
+        // Thrust W (1 + a sin(2π t / 0.7 s)): variance a²/2 of W².
+        let a = 0.1_f64;
+        let wave = |t: f64| (1.0 + a * (core::f64::consts::TAU * t / 0.7).sin()).sqrt();
+        let x = hover_excess(&p, &floor, &flight(&p, &floor, wave, |_| 0.0)).unwrap();
+        let collective = floor.power.motors_w * (1.0 + p.esc_loss_fraction);
+        let expected = collective * 0.375 * a * a / 2.0;
+        assert!(
+            (x.fluctuation_w - expected).abs() < 0.03 * expected,
+            "{x:?}"
+        );
+        assert!(x.sampling_w.abs() < 1e-9, "{x:?}");
+        assert!(
+            (x.predicted_w - x.measured_w).abs() < 0.03 * x.measured_w,
+            "{x:?}"
+        );
+        assert!(
+            x.tilt_w.abs() < 1e-9 && x.differential_w.abs() < 1e-9,
+            "{x:?}"
+        );
+    }
+
+    #[test]
+    fn a_steady_tilt_costs_the_thrust_that_holds_the_weight_up() {
+        let p = VehicleParams::f450();
+        let floor = floor_of(&p);
+        // Rolled 0.2 rad with the thrust raised by 1/cos: the vertical part carries the weight.
+        let roll = 0.2_f64;
+        let scale = |_| (1.0 / roll.cos()).sqrt();
+        let x = hover_excess(&p, &floor, &flight(&p, &floor, scale, |_| roll)).unwrap();
+        let expected = floor.total_w_at(&p, floor.weight_n / roll.cos()) - floor.power.total_w();
+        assert!((x.tilt_w - expected).abs() < 1e-9 * expected, "{x:?}");
+        assert!((x.measured_w - expected).abs() < 1e-6 * expected, "{x:?}");
+        assert!(
+            x.vertical_w.abs() < 1e-9 && x.fluctuation_w.abs() < 1e-9,
+            "{x:?}"
+        );
+        // Second order: 3/2 (1/cos - 1) is within a few percent at 0.2 rad.
+        assert!((x.predicted_w - expected).abs() < 0.05 * expected, "{x:?}");
+    }
+
+    #[test]
+    fn fewer_than_two_samples_give_nothing() {
+        let p = VehicleParams::f450();
+        let floor = floor_of(&p);
+        let one = flight(&p, &floor, |_| 1.0, |_| 0.0);
+        assert_eq!(hover_excess(&p, &floor, &one[..1]), None);
+        assert_eq!(hover_excess(&p, &floor, &[]), None);
+    }
 }
