@@ -3,10 +3,9 @@
 //! rotor states, beside the saving the question asks for.
 
 use super::energy::Row;
-use super::energy_plot::{color, legend, titled};
-use crate::plot::fonts_available;
+use super::energy_plot::{canvas, dots, legend, rings, titled};
 use plotters::prelude::*;
-use plumbline_sim::scenario::Controller;
+use plumbline_sim::scenario::Gains;
 use std::error::Error;
 use std::path::Path;
 
@@ -33,9 +32,7 @@ pub fn excess(path: &Path, rows: &[Row], target_w: f64) -> Result<(), Box<dyn Er
             (a.min(log10(w)), b.max(log10(w)))
         });
     let (lo, hi) = (lo.floor(), hi.ceil().max(lo.floor() + 1.0));
-    let root = BitMapBackend::new(path, (1000, 700)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let labels = fonts_available();
+    let (root, labels) = canvas(path, (1000, 700))?;
     let mut builder = titled(
         &root,
         labels,
@@ -72,36 +69,15 @@ pub fn excess(path: &Path, rows: &[Row], target_w: f64) -> Result<(), Box<dyn Er
             .label("10 % of the default's hold power")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 15, y)], RED));
     }
-    for c in [Controller::Pid, Controller::Mrac] {
-        let pts: Vec<(f64, f64)> = held
-            .iter()
-            .filter(|r| r.setting.controller == c)
-            .map(|r| (log10(r.excess.measured_w), log10(r.excess.predicted_w)))
-            .collect();
-        if pts.is_empty() {
-            continue;
-        }
-        let col = color(c);
-        let drawn = chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, col.filled())))?;
-        if labels {
-            drawn
-                .label(c.name())
-                .legend(move |(x, y)| Circle::new((x + 7, y), 4, col.filled()));
-        }
-    }
+    let at = |r: &Row| (log10(r.excess.measured_w), log10(r.excess.predicted_w));
+    dots(&mut chart, &held, labels, at)?;
     // Each controller's default is the first of its settings.
-    let defaults = rows
+    let defaults = held
         .iter()
-        .filter(|r| r.setting.gains == Default::default() && r.failed == 0)
-        .map(|r| {
-            let (m, p) = (r.excess.measured_w, r.excess.predicted_w);
-            Circle::new((log10(m), log10(p)), 9, RED.stroke_width(2))
-        });
-    let drawn = chart.draw_series(defaults)?;
+        .copied()
+        .filter(|r| r.setting.gains == Gains::default());
+    rings(&mut chart, defaults, labels, "default tunings", at)?;
     if labels {
-        drawn
-            .label("default tunings")
-            .legend(|(x, y)| Circle::new((x + 7, y), 6, RED.stroke_width(2)));
         legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     }
     root.present()?;

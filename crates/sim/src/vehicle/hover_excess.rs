@@ -61,10 +61,11 @@ impl HoverExcess {
 
     /// Each field the mean of `items`' (for several seeds of one setting).
     pub fn mean<'a>(items: impl Iterator<Item = &'a HoverExcess>) -> HoverExcess {
-        let (sum, n) = items.fold((HoverExcess::default(), 0usize), |(s, n), e| {
-            (s.plus(e), n + 1)
+        let (sum, n) = items.fold(([0.0; 9], 0usize), |(s, n), e| {
+            let f = e.fields();
+            (core::array::from_fn(|i| s[i] + f[i]), n + 1)
         });
-        sum.times(1.0 / n.max(1) as f64)
+        Self::from_fields(sum.map(|x| x / n.max(1) as f64))
     }
 
     fn fields(&self) -> [f64; 9] {
@@ -95,15 +96,6 @@ impl HoverExcess {
             sampling_w,
             predicted_w,
         }
-    }
-
-    fn plus(&self, o: &Self) -> Self {
-        let (a, b) = (self.fields(), o.fields());
-        Self::from_fields(core::array::from_fn(|i| a[i] + b[i]))
-    }
-
-    fn times(&self, k: f64) -> Self {
-        Self::from_fields(self.fields().map(|x| x * k))
     }
 }
 

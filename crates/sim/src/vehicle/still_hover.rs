@@ -29,7 +29,8 @@ impl StillHover {
     pub fn of(p: &VehicleParams, dynamics: &Dynamics) -> Option<Self> {
         let (rows, weight_n) = dynamics.hover_rows();
         let x = solve4(rows, [weight_n, 0.0, 0.0, 0.0])?;
-        if x.iter().any(|&xi| !(xi >= 0.0)) {
+        // NaN too: a singular system that slipped past the pivot test is no hover.
+        if !x.iter().all(|&xi| xi.is_finite() && xi >= 0.0) {
             return None;
         }
         let rotor_speed = x.map(f64::sqrt);
@@ -56,17 +57,20 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
     let scale = a.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
     for col in 0..4 {
         let pivot = (col..4).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if !(a[pivot][col].abs() > 1e-12 * scale) {
+        if a[pivot][col].abs() <= 1e-12 * scale {
             return None;
         }
         a.swap(col, pivot);
         b.swap(col, pivot);
-        for row in col + 1..4 {
-            let f = a[row][col] / a[col][col];
-            for k in col..4 {
-                a[row][k] -= f * a[col][k];
+        let b_col = b[col];
+        let (above, below) = a.split_at_mut(col + 1);
+        let pivot_row = &above[col];
+        for (row, rhs) in below.iter_mut().zip(&mut b[col + 1..]) {
+            let f = row[col] / pivot_row[col];
+            for (r, p) in row.iter_mut().zip(pivot_row).skip(col) {
+                *r -= f * p;
             }
-            b[row] -= f * b[col];
+            *rhs -= f * b_col;
         }
     }
     let mut x = [0.0; 4];
