@@ -406,6 +406,10 @@ pub fn run(args: EnergyArgs) -> CliResult {
         "scenario": args.scenario,
         "duration_s": args.duration,
         "still_hover_power_w": floor_w,
+        "still_hover_power_per_seed_w": runs[..args.seeds as usize]
+            .iter()
+            .map(|r| r.excess.floor_w)
+            .collect::<Vec<_>>(),
         "nominal_still_hover_power_w": nominal_w,
         "still_hover_note": "the floor is each flown vehicle's still hover, its seed's rotor \
             thrust mismatch included (a rotor giving more thrust at a given speed carries its \
