@@ -2,17 +2,20 @@
 # The adaptive controller's targets, measured on the `track` scenario (hall, UTM-30LX: at 1 m/s
 # the XV-11's keyframe odometry loses the lidar on the square, whoever flies):
 #  1. tracking: PID against MRAC on the square, nominal, mass +30 %, motor 1 at 80 % and both
-#     (calm: no gusts, no people), TRACK_SEEDS seeds each;
+#     (calm: no gusts, no people), TRACK_SEEDS seeds each from FIRST_SEED; the true error is
+#     split into the estimate's error from the setpoint (what the controller sees and acts on)
+#     and the estimate's error from the truth (what it cannot see);
 #  2. robustness: MRAC over ROBUST_SEEDS seeds for each model error, with
 #     the hall's person walking and the default gusts: crashes, runs that never reached Hold,
-#     adaptive fallbacks and the largest adaptive weight norm.
+#     adaptive fallbacks and the largest adaptive weight norm (0 seeds: tracking only).
 # Prints TSV tables; every run is a plain `plumbline sim ... --json` line you can repeat.
-#   bash scripts/mrac_targets.sh [TRACK_SEEDS] [ROBUST_SEEDS] [JOBS]
+#   bash scripts/mrac_targets.sh [TRACK_SEEDS] [ROBUST_SEEDS] [JOBS] [FIRST_SEED]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 track_seeds=${1:-10}
 robust_seeds=${2:-100}
 jobs=${3:-2}
+first_seed=${4:-1}
 cargo build --release -q -p plumbline
 bin=$PWD/target/release/plumbline
 out=$(mktemp -d)
@@ -26,13 +29,13 @@ run() {
     --seed "$seed" --json "$@" 2>/dev/null | tail -1 >"$out/$name.$controller.$seed"
 }
 export -f run
-export bin out
+export bin out first_seed
 
 # plan SEEDS "CONTROLLERS" NAME ARGS...: the run lines of one table row group
 plan() {
   local seeds=$1 controllers=$2 name=$3
   shift 3
-  for seed in $(seq 1 "$seeds"); do
+  for seed in $(seq "$first_seed" $((first_seed + seeds - 1))); do
     for controller in $controllers; do
       echo "run $name $controller $seed $*"
     done
@@ -52,7 +55,7 @@ plan() {
   plan "$robust_seeds" mrac storm --gust-storm
 } | xargs -P "$jobs" -I{} bash -c '{}'
 
-python3 - "$out" <<'PY'
+python3 - "$out" "$robust_seeds" <<'PY'
 import glob, json, os, statistics, sys
 out = sys.argv[1]
 runs = {}
@@ -68,7 +71,8 @@ def stats(name, controller):
     return rs, ok, track
 
 print("tracking (square, calm)")
-print("error\tcontroller\truns\tflew_track\tmean_rms_track_m\tmedian_rms_track_m\tmean_max_track_m")
+print("error\tcontroller\truns\tflew_track\tmean_rms_track_m\tmedian_rms_track_m\tmean_max_track_m"
+      "\tmean_rms_control_m\tmean_rms_estimate_m")
 for name in ["nominal", "heavy", "weak", "heavy-weak"]:
     for controller in ["pid", "mrac"]:
         rs, ok, track = stats(name, controller)
@@ -76,7 +80,15 @@ for name in ["nominal", "heavy", "weak", "heavy-weak"]:
         mean = f"{statistics.mean(track):.3f}" if track else "-"
         median = f"{statistics.median(track):.3f}" if track else "-"
         mmax = f"{statistics.mean(maxes):.3f}" if maxes else "-"
-        print(f"{name}\t{controller}\t{len(rs)}\t{len(track)}\t{mean}\t{median}\t{mmax}")
+        parts = []
+        for key in ["rms_track_control_error_m", "rms_track_estimate_error_m"]:
+            xs = [r[key] for r in ok if r.get(key) is not None]
+            parts.append(f"{statistics.mean(xs):.3f}" if xs else "-")
+        print(f"{name}\t{controller}\t{len(rs)}\t{len(track)}\t{mean}\t{median}\t{mmax}\t"
+              + "\t".join(parts))
+
+if int(sys.argv[2]) == 0:
+    sys.exit()
 
 print()
 print("robustness (square, person walking, gusts)")

@@ -29,7 +29,7 @@ fn state() -> EstimatedState {
 
 const SETPOINT: CascadeSetpoint = CascadeSetpoint {
     horizontal_m: Some([0.0, 0.0]),
-    feed_forward_m_s: None,
+    feed_forward: None,
     vertical: Vertical::Height(1.0),
     yaw_rad: 0.3,
 };

@@ -160,13 +160,16 @@ pub struct PositionSetpoint {
 }
 
 /// A setpoint from a mission (MAVLink SET_POSITION_TARGET_LOCAL_NED: position, velocity,
-/// yaw), in the estimate frame. A sequence of them flies a path: each moves the hold point,
-/// and its velocity is fed forward so the vehicle keeps up with it.
+/// acceleration, yaw), in the estimate frame. A sequence of them flies a path: each moves the
+/// hold point, and its velocity and acceleration are fed forward so the vehicle keeps up with
+/// it where it cruises and where it speeds up or slows down.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MissionSetpoint {
     pub position_m: [f32; 3],
     /// How fast the setpoint moves horizontally (m/s).
     pub velocity_m_s: [f32; 2],
+    /// How fast that velocity changes (m/s^2).
+    pub acceleration_m_s2: [f32; 2],
     pub yaw_rad: f32,
 }
 

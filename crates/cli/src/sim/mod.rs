@@ -192,6 +192,8 @@ fn summary(args: &SimArgs, config: &SimConfig, report: &Report, wall_s: f64) -> 
         "max_hold_error_m": score.hold.map(|h| h.max_m),
         "rms_track_error_m": score.track.map(|h| h.rms_m),
         "max_track_error_m": score.track.map(|h| h.max_m),
+        "rms_track_control_error_m": score.track_parts.map(|p| p.control.rms_m),
+        "rms_track_estimate_error_m": score.track_parts.map(|p| p.estimate.rms_m),
         "estimate_drift_m": score.estimate_drift_m,
         "min_clearance_m": out.min_clearance_m,
         "energy_wh": out.energy.total_wh(),

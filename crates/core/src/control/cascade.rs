@@ -30,16 +30,32 @@ pub enum Vertical {
     ClimbRate(f32),
 }
 
+/// How a moving horizontal setpoint moves, world frame. The velocity is added to the position
+/// loop's output and the acceleration to the velocity loop's, so the setpoint is followed
+/// without the lag an error would need to ask for that speed or that change of speed.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FeedForward {
+    pub velocity_m_s: [f32; 2],
+    pub accel_m_s2: [f32; 2],
+}
+
+impl FeedForward {
+    fn is_finite(&self) -> bool {
+        self.velocity_m_s
+            .iter()
+            .chain(&self.accel_m_s2)
+            .all(|v| v.is_finite())
+    }
+}
+
 /// What the guidance asks of the cascade.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CascadeSetpoint {
     /// World (x, y) to hold (m); `None` flies level with no horizontal loops, for when the
     /// horizontal estimate cannot be trusted (estimate-invalid landing).
     pub horizontal_m: Option<[f32; 2]>,
-    /// How fast the horizontal setpoint moves, world frame (m/s): added to the position loop's
-    /// output, so a moving setpoint is followed without the lag a position error would need
-    /// to ask for that speed. `None` for a fixed setpoint.
-    pub feed_forward_m_s: Option<[f32; 2]>,
+    /// How the horizontal setpoint moves; `None` for a fixed setpoint.
+    pub feed_forward: Option<FeedForward>,
     pub vertical: Vertical,
     pub yaw_rad: f32,
 }
@@ -49,6 +65,8 @@ pub struct CascadeSetpoint {
 pub struct VelocitySetpoint {
     /// World horizontal velocity (m/s); `None` means level flight.
     pub horizontal_m_s: Option<[f32; 2]>,
+    /// The setpoint's own horizontal acceleration (m/s^2), passed on to the velocity loops.
+    pub accel_m_s2: [f32; 2],
     pub climb_m_s: f32,
 }
 
@@ -284,11 +302,12 @@ impl Cascade {
         let Some(mrac) = &mut self.mrac else {
             return Ok(None);
         };
-        let [x, y] = match (setpoint.horizontal_m, setpoint.feed_forward_m_s) {
+        let [x, y] = match (setpoint.horizontal_m, setpoint.feed_forward) {
             (Some([x, y]), None) => [Command::Position(x), Command::Position(y)],
-            (Some(p), Some(v)) => core::array::from_fn(|k| Command::Track {
+            (Some(p), Some(ff)) => core::array::from_fn(|k| Command::Track {
                 position_m: p[k],
-                velocity_m_s: v[k],
+                velocity_m_s: ff.velocity_m_s[k],
+                accel_m_s2: ff.accel_m_s2[k],
             }),
             (None, _) => [Command::Off; 2],
         };
@@ -311,6 +330,7 @@ impl Cascade {
         state: &EstimatedState,
         dt: f32,
     ) -> Result<VelocitySetpoint, PidError> {
+        let mut accel_m_s2 = [0.0; 2];
         let horizontal_m_s = match setpoint.horizontal_m {
             Some(target) => {
                 let mut v = [0.0; 2];
@@ -318,11 +338,13 @@ impl Cascade {
                     let x = state.position_m[axis];
                     *out = self.position[axis].update(target[axis], x, 0.0, dt, false)?;
                 }
-                if let Some(ff) = setpoint.feed_forward_m_s {
-                    if !(ff[0].is_finite() && ff[1].is_finite()) {
+                if let Some(ff) = setpoint.feed_forward {
+                    if !ff.is_finite() {
                         return Err(PidError::NonFinite);
                     }
-                    v = [v[0] + ff[0], v[1] + ff[1]];
+                    let u = ff.velocity_m_s;
+                    v = [v[0] + u[0], v[1] + u[1]];
+                    accel_m_s2 = ff.accel_m_s2;
                 }
                 Some(v)
             }
@@ -341,6 +363,7 @@ impl Cascade {
         };
         Ok(VelocitySetpoint {
             horizontal_m_s,
+            accel_m_s2,
             climb_m_s,
         })
     }
@@ -359,8 +382,8 @@ impl Cascade {
             Some(target) => {
                 for axis in 0..2 {
                     let v = state.velocity_m_s[axis];
-                    accel[axis] =
-                        self.velocity[axis].update(target[axis], v, 0.0, dt, integrate)?;
+                    let ff = velocity_sp.accel_m_s2[axis];
+                    accel[axis] = self.velocity[axis].update(target[axis], v, ff, dt, integrate)?;
                 }
             }
             None => {
@@ -464,7 +487,7 @@ mod tests {
     fn hold(p: [f32; 3]) -> CascadeSetpoint {
         CascadeSetpoint {
             horizontal_m: Some([p[0], p[1]]),
-            feed_forward_m_s: None,
+            feed_forward: None,
             vertical: Vertical::Height(p[2]),
             yaw_rad: 0.0,
         }
@@ -473,6 +496,7 @@ mod tests {
     fn level(horizontal_m_s: [f32; 2], climb_m_s: f32) -> VelocitySetpoint {
         VelocitySetpoint {
             horizontal_m_s: Some(horizontal_m_s),
+            accel_m_s2: [0.0; 2],
             climb_m_s,
         }
     }
@@ -521,6 +545,49 @@ mod tests {
         );
         smooth.reset();
         assert_eq!(smooth.filtered_tilt_rad, None);
+    }
+
+    #[test]
+    fn a_setpoint_speeding_up_is_flown_at_its_acceleration_with_no_error() {
+        let mut c = Cascade::new(CascadeConfig::default());
+        let s = level_at([0.0, 0.0, 1.0]);
+        let sp = CascadeSetpoint {
+            feed_forward: Some(FeedForward {
+                velocity_m_s: [0.0; 2],
+                accel_m_s2: [1.0, 0.0],
+            }),
+            ..hold([0.0, 0.0, 1.0])
+        };
+        let v = c.velocity_setpoint(&sp, &s, 0.01).unwrap();
+        assert_eq!(v.accel_m_s2, [1.0, 0.0]);
+        let t = c.attitude_target(v, 0.0, &s, 0.01, false).unwrap();
+        // Thrust tilted forward so that its horizontal share is 1 m/s^2 at 1 g of lift.
+        let forward = GRAVITY_M_S2 * libm::tanf(t.pitch_rad);
+        assert!((forward - 1.0).abs() < 1e-4, "{t:?}");
+        assert!(t.roll_rad.abs() < 1e-6);
+        let bad = CascadeSetpoint {
+            feed_forward: Some(FeedForward {
+                velocity_m_s: [0.0; 2],
+                accel_m_s2: [f32::NAN, 0.0],
+            }),
+            ..sp
+        };
+        assert_eq!(
+            c.velocity_setpoint(&bad, &s, 0.01),
+            Err(PidError::NonFinite)
+        );
+    }
+
+    #[test]
+    fn the_climb_integral_may_carry_what_the_collective_bounds_can_lift() {
+        let c = CascadeConfig::default().fitted(0.275, [400.0, 400.0, 20.0]);
+        let authority = GRAVITY_M_S2 * (0.9 / 0.275 - 1.0);
+        assert!((c.climb_authority_m_s2() - authority).abs() < 1e-4);
+        assert_eq!(c.velocity_z.integral_limit, c.climb_authority_m_s2());
+        // Mass x1.3 with one motor at 80 %: 1.3 / 0.95 - 1 of g more than the model's hover.
+        assert!(c.velocity_z.integral_limit > (1.3 / 0.95 - 1.0) * GRAVITY_M_S2);
+        assert_eq!(c.hover_collective, 0.275);
+        assert_eq!(c.effectiveness_rad_s2, [400.0, 400.0, 20.0]);
     }
 
     #[test]
@@ -592,7 +659,7 @@ mod tests {
         s.velocity_m_s = [0.5, 0.5, 0.0];
         let sp = CascadeSetpoint {
             horizontal_m: None,
-            feed_forward_m_s: None,
+            feed_forward: None,
             vertical: Vertical::ClimbRate(-0.5),
             yaw_rad: 0.0,
         };

@@ -2,6 +2,7 @@
 //! every loop may ask for.
 
 use super::pid::PidConfig;
+use crate::msgs::GRAVITY_M_S2;
 
 /// Gains and limits of the whole cascade. Defaults suit the simulator's "pelican" vehicle (1 kg,
 /// 0.21 m arms, 7 N rotors); for another vehicle set `effectiveness_rad_s2` and
@@ -46,6 +47,27 @@ pub struct CascadeConfig {
 }
 
 impl CascadeConfig {
+    /// The vertical acceleration above hover (m/s^2) that the collective bounds leave when
+    /// level: `g (max_collective / hover_collective - 1)`.
+    pub fn climb_authority_m_s2(&self) -> f32 {
+        GRAVITY_M_S2 * (self.max_collective / self.hover_collective - 1.0)
+    }
+
+    /// These gains on a vehicle with this hover collective and control effectiveness. The
+    /// climb integral, which carries whatever the hover collective gets wrong (a heavier
+    /// vehicle, a weak motor), may then carry as much as the collective can lift: a fixed
+    /// bound below that would leave a vehicle the motors can fly unable to climb to its
+    /// height.
+    pub fn fitted(self, hover_collective: f32, effectiveness_rad_s2: [f32; 3]) -> Self {
+        let mut c = Self {
+            hover_collective,
+            effectiveness_rad_s2,
+            ..self
+        };
+        c.velocity_z.integral_limit = c.climb_authority_m_s2();
+        c
+    }
+
     /// The "soft" tuning of the energy comparison (seed 000 sec. 5.3: smoother control may spend
     /// less energy): slower position and velocity loops, same inner loops.
     pub fn soft() -> Self {
@@ -74,7 +96,7 @@ impl Default for CascadeConfig {
     /// 2 N push (crates/sim/tests/closed_loop.rs); stiffer loops (position 2, velocity 5,
     /// attitude 10, rate 40) oscillate on the lidar's noise there.
     fn default() -> Self {
-        Self {
+        let c = Self {
             position_xy: PidConfig::p(1.5, 1.0),
             position_z: PidConfig::p(1.5, 0.8),
             velocity_xy: PidConfig {
@@ -91,7 +113,8 @@ impl Default for CascadeConfig {
                 kp: 4.0,
                 ki: 1.0,
                 kd: 0.0,
-                integral_limit: 3.0,
+                // Set by `fitted` from the collective bounds.
+                integral_limit: 0.0,
                 output_limit: 5.0,
                 derivative_tau_s: 0.0,
             },
@@ -121,6 +144,7 @@ impl Default for CascadeConfig {
             max_collective: 0.9,
             outer_period_s: 0.01,
             command_tau_s: 0.0,
-        }
+        };
+        c.fitted(c.hover_collective, c.effectiveness_rad_s2)
     }
 }

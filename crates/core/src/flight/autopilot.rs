@@ -9,7 +9,7 @@
 use super::events::{EventKind, EventLog};
 use super::mission::Mission;
 use super::supervisor::{Status, Supervisor, EVENT_LOG_LEN};
-use crate::control::cascade::{Cascade, CascadeSetpoint, Vertical};
+use crate::control::cascade::{Cascade, CascadeSetpoint, FeedForward, Vertical};
 use crate::control::mixer::{Demand, Mixer};
 use crate::control::mrac::{FallbackReason, Mrac, AUTOPILOT_CENTRES};
 use crate::control::sas;
@@ -220,7 +220,7 @@ impl Autopilot {
         let mission = self.follow(mode, inputs.mission);
         let mut setpoint = self.guide(mode, failsafe, &estimate, inputs.t_s);
         if let Some(sp) = setpoint.as_mut() {
-            sp.feed_forward_m_s = mission;
+            sp.feed_forward = mission;
         }
 
         // ---- control: cascade in the autonomous modes, rate damping in manual ----
@@ -309,15 +309,20 @@ impl Autopilot {
     }
 
     /// A mission setpoint, in Hold, becomes the hold point (so the vehicle stays where the
-    /// mission left it when the setpoints stop); returns its velocity to feed forward. Other
-    /// modes ignore the mission: takeoff, landing and failsafes keep their own setpoints.
-    /// A setpoint with a non-finite value is ignored whole.
-    fn follow(&mut self, mode: FlightMode, mission: Option<MissionSetpoint>) -> Option<[f32; 2]> {
+    /// mission left it when the setpoints stop); returns its velocity and acceleration to feed
+    /// forward. Other modes ignore the mission: takeoff, landing and failsafes keep their own
+    /// setpoints. A setpoint with a non-finite value is ignored whole.
+    fn follow(
+        &mut self,
+        mode: FlightMode,
+        mission: Option<MissionSetpoint>,
+    ) -> Option<FeedForward> {
         let m = mission.filter(|_| mode == FlightMode::Hold)?;
         let finite = m
             .position_m
             .iter()
             .chain(&m.velocity_m_s)
+            .chain(&m.acceleration_m_s2)
             .all(|v| v.is_finite())
             && m.yaw_rad.is_finite();
         if !finite {
@@ -328,7 +333,10 @@ impl Autopilot {
             position_m: m.position_m,
             yaw_rad: m.yaw_rad,
         };
-        Some(m.velocity_m_s)
+        Some(FeedForward {
+            velocity_m_s: m.velocity_m_s,
+            accel_m_s2: m.acceleration_m_s2,
+        })
     }
 
     /// The cascade setpoint of each flying mode.
@@ -344,7 +352,7 @@ impl Autopilot {
         match mode {
             FlightMode::Takeoff | FlightMode::Hold => Some(CascadeSetpoint {
                 horizontal_m: Some(hold_xy),
-                feed_forward_m_s: None,
+                feed_forward: None,
                 vertical: Vertical::Height(self.home.position_m[2]),
                 yaw_rad,
             }),
@@ -357,7 +365,7 @@ impl Autopilot {
                 let [x, y, yaw_rad] = self.mission.target(t_s, &frame, e, gain, lidar_lost);
                 Some(CascadeSetpoint {
                     horizontal_m: Some([x, y]),
-                    feed_forward_m_s: None,
+                    feed_forward: None,
                     vertical: Vertical::Height(self.home.position_m[2]),
                     yaw_rad,
                 })
@@ -379,7 +387,7 @@ impl Autopilot {
                 let trusted = e.valid && failsafe != Some(FailsafeReason::LidarLost);
                 Some(CascadeSetpoint {
                     horizontal_m: trusted.then_some(hold_xy),
-                    feed_forward_m_s: None,
+                    feed_forward: None,
                     vertical: Vertical::ClimbRate(-rate),
                     yaw_rad,
                 })

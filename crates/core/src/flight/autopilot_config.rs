@@ -34,8 +34,9 @@ impl AutopilotConfig {
             frame: airframe.frame,
             ..Self::default()
         };
-        c.cascade.hover_collective = airframe.hover_collective();
-        c.cascade.effectiveness_rad_s2 = airframe.effectiveness_rad_s2();
+        c.cascade = c
+            .cascade
+            .fitted(airframe.hover_collective(), airframe.effectiveness_rad_s2());
         c
     }
 }

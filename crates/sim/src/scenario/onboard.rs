@@ -74,11 +74,9 @@ pub(super) fn stack(
     let mut autopilot = autopilot_for(&config.vehicle);
     if options.tuning == Tuning::Soft {
         // The airframe's hover collective and effectiveness stay; only the gains change.
-        autopilot.cascade = CascadeConfig {
-            hover_collective: autopilot.cascade.hover_collective,
-            effectiveness_rad_s2: autopilot.cascade.effectiveness_rad_s2,
-            ..CascadeConfig::soft()
-        };
+        let c = &autopilot.cascade;
+        autopilot.cascade =
+            CascadeConfig::soft().fitted(c.hover_collective, c.effectiveness_rad_s2);
     }
     if options.controller == Some(Controller::Mrac) {
         autopilot.controller = ControllerKind::Mrac;

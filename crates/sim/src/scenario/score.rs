@@ -96,8 +96,21 @@ pub struct Score {
     pub estimate_drift_m: Option<f64>,
     /// From the mission's setpoints while it lasted (onboard flights with a mission only).
     pub track: Option<HoldError>,
+    /// The tracking error split in two over the same instants as `track` (onboard flights
+    /// with a mission only).
+    pub track_parts: Option<TrackParts>,
     pub onboard: Option<OnboardScore>,
     pub explore: Option<ExploreScore>,
+}
+
+/// The true tracking error is the estimate's error from the setpoint, which the controller
+/// sees and acts on, plus the estimate's error from the truth, which it cannot see.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrackParts {
+    /// Horizontal distance of the onboard estimate from the setpoint, m.
+    pub control: HoldError,
+    /// Horizontal distance of the onboard estimate from the truth, m.
+    pub estimate: HoldError,
 }
 
 /// What only an onboard flight is scored on.
@@ -254,23 +267,43 @@ fn recovering(config: &SimConfig, t: f64) -> bool {
 }
 
 /// The tracking error of the true `states` from `mission`'s setpoints (estimate frame, which
-/// starts at the take-off pose) while it lasted, `shift_s` later than planned.
+/// starts at the take-off pose) while it lasted, `shift_s` later than planned; and the error of
+/// the onboard estimate (the log's sample nearest in time) from the setpoint and the truth.
 fn track_error(
     mission: &Mission,
     shift_s: f64,
     config: &SimConfig,
+    log: &FlightLog,
     states: &[StateSample],
-) -> Option<HoldError> {
-    let mut tally = ErrorTally::default();
+) -> (Option<HoldError>, Option<TrackParts>) {
+    let mut track = ErrorTally::default();
+    let mut control = ErrorTally::default();
+    let mut estimate = ErrorTally::default();
+    let samples = &log.samples;
     for s in states {
         if let Some((p, _)) = mission.at(s.t_s - shift_s) {
-            tally.add(horizontal_error(
-                s.position,
-                to_world(config.world.start, p),
-            ));
+            let start = config.world.start;
+            let setpoint = to_world(start, p);
+            track.add(horizontal_error(s.position, setpoint));
+            let k = samples.partition_point(|o| o.t_s < s.t_s);
+            let nearest = [k.checked_sub(1), Some(k)]
+                .into_iter()
+                .flatten()
+                .filter_map(|i| samples.get(i))
+                .min_by(|a, b| (a.t_s - s.t_s).abs().total_cmp(&(b.t_s - s.t_s).abs()));
+            if let Some(o) = nearest {
+                let [ex, ey, _] = o.estimate.position_m.map(f64::from);
+                let [wx, wy] = to_world(start, [ex, ey]);
+                control.add((wx - setpoint[0]).hypot(wy - setpoint[1]));
+                estimate.add(horizontal_error(s.position, [wx, wy]));
+            }
         }
     }
-    tally.result()
+    let parts = control
+        .result()
+        .zip(estimate.result())
+        .map(|(control, estimate)| TrackParts { control, estimate });
+    (track.result(), parts)
 }
 
 /// Scores an onboard flight on the truth `states`: holding over the start outside the pushes
@@ -319,12 +352,16 @@ fn score_onboard(
     });
     let crashed = matches!(outcome.status, Status::Crashed { .. });
     let flew = log.modes.iter().any(|m| m.1 == FlightMode::Takeoff);
+    let (track, track_parts) = mission
+        .zip(log.mission_shift_s)
+        .map_or((None, None), |(m, shift)| {
+            track_error(m, shift, config, log, states)
+        });
     Score {
         hold,
         estimate_drift_m: drift,
-        track: mission
-            .zip(log.mission_shift_s)
-            .and_then(|(m, shift)| track_error(m, shift, config, states)),
+        track,
+        track_parts,
         onboard: Some(OnboardScore {
             push_max_error_m,
             recovery_s,

@@ -124,7 +124,13 @@ impl Default for MracConfig {
                 e_modification: 0.01,
                 rbf_width: 0.6,
                 velocity_scale_m_s: 1.0,
-                accel_scale_m_s2: 4.0,
+                // The accelerations paths ask for (the track's 1 m/s^2, a hold's recovery), so
+                // the linear term that carries a thrust-scale error (a share of the commanded
+                // acceleration) sees inputs near 1. Scaled by the model's 4 m/s^2 bound they
+                // sat near 0.25 and that weight learned 16 times slower: with mass x1.3 and a
+                // motor at 80 %, the error it should cancel (-0.27 x the command) correlated
+                // 0.22 with its output, 0.63 with this scale.
+                accel_scale_m_s2: 1.0,
                 // 0.6 g: a 30 % heavier vehicle with a motor at 80 % needs about 2.6 m/s^2.
                 weight_bound: 6.0,
             },

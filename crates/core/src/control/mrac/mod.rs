@@ -200,7 +200,8 @@ impl<const C: usize> Mrac<C> {
             Command::Track {
                 position_m,
                 velocity_m_s,
-            } => position_m.is_finite() && velocity_m_s.is_finite(),
+                accel_m_s2,
+            } => position_m.is_finite() && velocity_m_s.is_finite() && accel_m_s2.is_finite(),
             Command::Off => true,
         });
         if !(state.position_m.iter().all(|v| finite(*v))

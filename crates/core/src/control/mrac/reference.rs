@@ -8,9 +8,13 @@ use super::config::ReferenceConfig;
 pub enum Command {
     /// Go to and hold this position (m).
     Position(f32),
-    /// Follow a moving position (m) that moves at this velocity (m/s): the velocity is fed
-    /// forward so the model keeps up without lagging.
-    Track { position_m: f32, velocity_m_s: f32 },
+    /// Follow a moving position (m) that moves at this velocity (m/s) and acceleration
+    /// (m/s^2): both are fed forward so the model keeps up without lagging.
+    Track {
+        position_m: f32,
+        velocity_m_s: f32,
+        accel_m_s2: f32,
+    },
     /// Fly this velocity (m/s); landing descends at a rate, not to a height.
     Velocity(f32),
     /// No control on this channel: level flight when the horizontal estimate is not trusted.
@@ -30,17 +34,21 @@ impl ReferenceChannel {
     /// velocity error, bounded. Zero for [`Command::Off`].
     pub fn acceleration(&self, c: &ReferenceConfig, command: Command) -> f32 {
         let bounded = |v: f32| v.clamp(-c.max_speed_m_s, c.max_speed_m_s);
-        let target_m_s = match command {
-            Command::Position(r) => bounded(c.position_gain_per_s * (r - self.position_m)),
-            // As the PID's position loop does: the bounded correction plus the feed-forward.
+        let (target_m_s, feed_forward_m_s2) = match command {
+            Command::Position(r) => (bounded(c.position_gain_per_s * (r - self.position_m)), 0.0),
+            // As the PID's loops do: the bounded correction plus the feed-forwards.
             Command::Track {
                 position_m,
                 velocity_m_s,
-            } => bounded(c.position_gain_per_s * (position_m - self.position_m)) + velocity_m_s,
-            Command::Velocity(v) => bounded(v),
+                accel_m_s2,
+            } => (
+                bounded(c.position_gain_per_s * (position_m - self.position_m)) + velocity_m_s,
+                accel_m_s2,
+            ),
+            Command::Velocity(v) => (bounded(v), 0.0),
             Command::Off => return 0.0,
         };
-        (c.velocity_gain_per_s * (target_m_s - self.velocity_m_s))
+        (c.velocity_gain_per_s * (target_m_s - self.velocity_m_s) + feed_forward_m_s2)
             .clamp(-c.max_accel_m_s2, c.max_accel_m_s2)
     }
 
@@ -118,12 +126,27 @@ mod tests {
                 Command::Track {
                     position_m: r,
                     velocity_m_s: 0.8,
+                    accel_m_s2: 0.0,
                 },
             );
             m.advance(a, 0.001);
             r += 0.8 * 0.001;
         }
         assert!((m.position_m - r).abs() < 2e-3, "{m:?} {r}");
+        // On a point that speeds up, the model's acceleration is the point's.
+        let on_it = ReferenceChannel {
+            position_m: 1.0,
+            velocity_m_s: 0.5,
+        };
+        let a = on_it.acceleration(
+            &c,
+            Command::Track {
+                position_m: 1.0,
+                velocity_m_s: 0.5,
+                accel_m_s2: 0.7,
+            },
+        );
+        assert!((a - 0.7).abs() < 1e-6, "{a}");
     }
 
     #[test]
