@@ -61,6 +61,8 @@ pub struct ScanMatchDelta {
     /// Rotation, normalised to (-pi, pi].
     pub dtheta_rad: f32,
     /// Covariance of (dx_m, dy_m, dtheta_rad); units m^2, m*rad, rad^2. Row-major, symmetric.
+    /// With a `degenerate_axis` only the part across the axis counts (the variance along it
+    /// may be zero or anything): the estimator uses the translation across it and the rotation.
     pub covariance: [[f32; 3]; 3],
     /// Unit vector (reference frame) along which the match could not constrain translation, e.g.
     /// the axis of a featureless corridor. `None` when all directions are observed.

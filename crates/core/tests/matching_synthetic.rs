@@ -113,6 +113,19 @@ fn a_corridor_is_reported_degenerate_along_its_axis_and_keeps_the_guess_there() 
     assert!((r.motion.x - 0.25).abs() < 0.02, "{:?}", r.motion);
     assert!(r.covariance[0][0] >= UNOBSERVED_VARIANCE * 0.9);
     assert!(r.covariance[1][1] < 1e-2);
+    // What a filter fuses: nothing along the axis, the same variance across it and in rotation.
+    let o = r.observed_covariance;
+    let across = v.perp();
+    let var_across = across.x * across.x * o[0][0]
+        + 2.0 * across.x * across.y * o[0][1]
+        + across.y * across.y * o[1][1];
+    assert!(o[0][0] < 1e-2, "{o:?}");
+    assert!(
+        var_across > 0.0 && (var_across - r.covariance[1][1]).abs() < 0.01 * var_across,
+        "{var_across} against {:?}",
+        r.covariance
+    );
+    assert_eq!(o[2][2], r.covariance[2][2]);
 }
 
 #[test]

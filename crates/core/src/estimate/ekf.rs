@@ -286,7 +286,7 @@ impl Ekf {
         }
         // The clones' own block came out of the column passes, each entry and its mirror by
         // different roundings: one triangle is copied onto the other, so P stays exactly
-        // symmetric (the updates keep it so and do not symmetrise).
+        // symmetric.
         for a in 1..3 {
             for b in 0..a {
                 self.p[(ix::CLONE + b, ix::CLONE + a)] = self.p[(ix::CLONE + a, ix::CLONE + b)];
@@ -326,6 +326,9 @@ impl Ekf {
         {
             return Outcome::Invalid;
         }
+        if !well_conditioned(&r) {
+            return Outcome::Invalid;
+        }
         let pht = times_ht(&self.p, &h);
         let s = h * pht + r;
         let Some(chol) = s.cholesky() else {
@@ -343,39 +346,54 @@ impl Ekf {
             k.row_mut(i).fill(0.0);
         }
         self.x += k * residual;
-        // Joseph form (I - KH) P (I - KH)^T + K R K^T multiplied out: with U = P H^T and
-        // S = H U + R it is P - K U^T - U K^T + K S K^T for any gain (zeroed consider rows
-        // included), which is P - (K W^T + W K^T) with W = U - K S / 2. One symmetric correction
-        // of rank 2M on one triangle, mirrored: N x N temporaries and a symmetrising pass would
-        // be most of an update's cost.
-        let w = pht - k * s * 0.5;
-        subtract_symmetric_product(&mut self.p, &k, &w);
+        self.joseph(&k, &h, &r, &pht);
         self.x[ix::YAW] = crate::geom::normalize_angle(self.x[ix::YAW]);
         Outcome::Accepted
     }
 }
 
-/// `p -= k w^T + w k^T` over whole columns: contiguous and of fixed length, so the loop
-/// vectorises (a triangle and its mirror, strided, cost twice as much). Entries (i, j) and
-/// (j, i) take the same two products in the same order, so a symmetric P stays exactly
-/// symmetric (the propagation keeps it so too).
-fn subtract_symmetric_product<const M: usize>(
-    p: &mut Covariance,
-    k: &SMatrix<f32, N, M>,
-    w: &SMatrix<f32, N, M>,
-) {
-    for (j, column) in p.as_mut_slice().chunks_exact_mut(N).enumerate() {
-        for (kc, wc) in k
-            .as_slice()
-            .chunks_exact(N)
-            .zip(w.as_slice().chunks_exact(N))
-        {
-            let (kj, wj) = (kc[j], wc[j]);
-            for ((out, &ki), &wi) in column.iter_mut().zip(kc).zip(wc) {
-                *out -= ki * wj + wi * kj;
-            }
-        }
+impl Ekf {
+    /// `P = (I - KH) P (I - KH)^T + K R K^T` (Joseph form) as products, for any gain (zeroed
+    /// consider rows included), then symmetrised. A sum of two positive semi-definite terms,
+    /// so rounding cannot take it far below zero whatever the gain's own rounding; the same
+    /// form multiplied out (`P - K U^T - U K^T + K S K^T`) cancels terms of the size of S and
+    /// with a noise of 1e4 along one direction and 1e-5 across it left variances negative.
+    /// `pht` is `P H^T`, so `(I - KH) P = P - K pht^T`; with H sparse and M small every
+    /// product is O(N^2 M).
+    fn joseph<const M: usize>(
+        &mut self,
+        k: &SMatrix<f32, N, M>,
+        h: &SMatrix<f32, M, N>,
+        r: &SMatrix<f32, M, M>,
+        pht: &SMatrix<f32, N, M>,
+    ) {
+        let mut a_p = self.p;
+        a_p.gemm(-1.0, k, &pht.transpose(), 1.0);
+        let a_p_ht = times_ht(&a_p, h);
+        // (I - KH) P (I - KH)^T + K R K^T = A P - (A P H^T - K R) K^T.
+        let mut p = a_p;
+        p.gemm(-1.0, &(a_p_ht - k * r), &k.transpose(), 1.0);
+        self.p = (p + p.transpose()) * 0.5;
     }
+}
+
+/// Smallest pivot of the noise's Cholesky factor against its own variance that f32 holds
+/// faithfully. Each pivot is a variance minus what the earlier rows explain of it, so rounding
+/// errs by about 6e-8 of that variance: a noise of 1e4 along a rotated axis and 1e-5 across
+/// it is, once stored, whatever the rounding made of the small variance, often negative.
+/// 1e-5 leaves the rounding a hundredth of the pivot.
+const MIN_NOISE_PIVOT: f32 = 1e-5;
+
+/// Noise that is positive definite by a margin f32 can hold. Noise that is not claims more than
+/// perfect knowledge in some direction: the update would take out more variance than the state
+/// has, and the covariance would stop being positive semi-definite whatever form the update
+/// takes.
+fn well_conditioned<const M: usize>(r: &SMatrix<f32, M, M>) -> bool {
+    let Some(chol) = r.cholesky() else {
+        return false;
+    };
+    let l = chol.l_dirty();
+    (0..M).all(|i| l[(i, i)] * l[(i, i)] >= MIN_NOISE_PIVOT * r[(i, i)])
 }
 
 /// True when no value is NaN or infinite (v * 0 is 0 for finite v and NaN otherwise): cheaper
@@ -489,6 +507,22 @@ mod tests {
             SMatrix::<f32, 1, 1>::new(-1.0),
         );
         assert_eq!(bad, Outcome::Invalid);
+        // 1e4 along a diagonal and 1e-5 across it: in f32 the small variance is lost in the
+        // rounding of the large one (a corridor's unobserved axis, rotated).
+        let mut h2 = SMatrix::<f32, 2, N>::zeros();
+        h2[(0, ix::POS)] = 1.0;
+        h2[(1, ix::POS + 1)] = 1.0;
+        let (along, across) = (1e4f32, 1e-5f32);
+        let r = SMatrix::<f32, 2, 2>::new(
+            0.5 * (along + across),
+            0.5 * (along - across),
+            0.5 * (along - across),
+            0.5 * (along + across),
+        );
+        assert_eq!(f.update(SVector::zeros(), h2, r), Outcome::Invalid);
+        // The same noise along the axes is held exactly, and fused.
+        let r = SMatrix::<f32, 2, 2>::new(along, 0.0, 0.0, across);
+        assert_eq!(f.update(SVector::zeros(), h2, r), Outcome::Accepted);
         assert!(f.is_valid());
     }
 

@@ -128,8 +128,7 @@ impl Ekf {
                 p[row * N + k] = x;
             }
         }
-        // One triangle of the block, mirrored: P stays exactly symmetric, which the updates
-        // rely on (they keep it so without a symmetrising pass).
+        // One triangle of the block, mirrored: P stays exactly symmetric.
         for (m, (row, &i)) in block.iter().zip(&MOVED).enumerate() {
             for (&x, &k) in row[..=m].iter().zip(&MOVED) {
                 p[k * N + i] = x;

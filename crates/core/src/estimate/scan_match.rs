@@ -42,10 +42,9 @@ impl Ekf {
     fn fuse_delta(&mut self, m: &ScanMatchDelta, latency_s: f32) -> Outcome {
         let c = Matrix3::from_fn(|i, j| m.covariance[i][j]) * self.config.scan_covariance_scale;
         let z = Vector3::new(m.dx_m, m.dy_m, m.dtheta_rad);
-        let well_formed = z.iter().all(|v| v.is_finite())
-            && c.iter().all(|v| v.is_finite())
-            && (0..3).all(|i| c[(i, i)] > 0.0);
-        if !well_formed {
+        // Finite values; whether the noise of what is fused is positive definite, the update
+        // checks (with a degenerate axis, the variance along it need not be).
+        if !(z.iter().all(|v| v.is_finite()) && c.iter().all(|v| v.is_finite())) {
             return Outcome::Invalid;
         }
         let l = latency_s;

@@ -116,7 +116,7 @@ pub fn scan_match_delta(step: &OdometryStep, t_s: f64) -> ScanMatchDelta {
             delta.dx_m = result.motion.x;
             delta.dy_m = result.motion.y;
             delta.dtheta_rad = result.motion.theta;
-            delta.covariance = result.covariance;
+            delta.covariance = result.observed_covariance;
             delta.degenerate_axis = result.quality.degenerate_direction.map(|d| [d.x, d.y]);
         }
         OdometryStep::Predicted { .. } => {}

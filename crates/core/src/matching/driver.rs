@@ -163,11 +163,12 @@ pub fn report(
     let conditioning = if hi > 0.0 { (lo / hi).max(0.0) } else { 0.0 };
     let dof = (stats.weight_sum - 3.0).max(1.0);
     let s2 = (stats.weighted_sq_sum / dof).max(MIN_SIGMA_M * MIN_SIGMA_M * 0.25);
-    let covariance = covariance(stats, degenerate, s2);
+    let (covariance, observed_covariance) = covariances(stats, degenerate, s2);
     let inliers = stats.inliers;
     MatchResult {
         motion,
         covariance,
+        observed_covariance,
         quality: MatchQuality {
             status,
             iterations,
@@ -191,13 +192,20 @@ pub fn report(
     }
 }
 
-/// s² times the inverse information; along a degenerate direction, [`UNOBSERVED_VARIANCE`].
-fn covariance(stats: &PassStats, degenerate: Option<Vec2>, s2: f32) -> [[f32; 3]; 3] {
+/// s² times the inverse information, and the part of it the match observed. Along a
+/// degenerate direction the full covariance has [`UNOBSERVED_VARIANCE`] and the observed one
+/// nothing (see [`MatchResult::observed_covariance`]).
+fn covariances(
+    stats: &PassStats,
+    degenerate: Option<Vec2>,
+    s2: f32,
+) -> ([[f32; 3]; 3], [[f32; 3]; 3]) {
     let h = stats.information;
     match (degenerate, h.inverse()) {
         (None, Some(inv)) => {
             let m = inv.to_array();
-            core::array::from_fn(|i| core::array::from_fn(|j| s2 * m[i][j]))
+            let full = core::array::from_fn(|i| core::array::from_fn(|j| s2 * m[i][j]));
+            (full, full)
         }
         _ => {
             let (a, b, c) = h.translation_schur();
@@ -213,19 +221,27 @@ fn covariance(stats: &PassStats, degenerate: Option<Vec2>, s2: f32) -> [[f32; 3]
             } else {
                 UNOBSERVED_VARIANCE
             };
-            let t = |i: usize, j: usize| {
-                let (vi, vj) = ([v_hi.x, v_hi.y][i] * var_hi, [v_hi.x, v_hi.y][j]);
-                let (ui, uj) = (
-                    [v_lo.x, v_lo.y][i] * UNOBSERVED_VARIANCE,
-                    [v_lo.x, v_lo.y][j],
-                );
-                vi * vj + ui * uj
+            let matrix = |var_lo: f32| {
+                let t = |i: usize, j: usize| {
+                    let (hi_i, hi_j) = ([v_hi.x, v_hi.y][i], [v_hi.x, v_hi.y][j]);
+                    let (lo_i, lo_j) = ([v_lo.x, v_lo.y][i], [v_lo.x, v_lo.y][j]);
+                    hi_i * var_hi * hi_j + lo_i * var_lo * lo_j
+                };
+                [
+                    [t(0, 0), t(0, 1), 0.0],
+                    [t(1, 0), t(1, 1), 0.0],
+                    [0.0, 0.0, var_rot],
+                ]
             };
-            [
-                [t(0, 0), t(0, 1), 0.0],
-                [t(1, 0), t(1, 1), 0.0],
-                [0.0, 0.0, var_rot],
-            ]
+            let full = matrix(UNOBSERVED_VARIANCE);
+            // Without a reported degenerate direction (the information only failed to invert)
+            // a filter has no axis to leave out, so it gets the full covariance.
+            let observed = if degenerate.is_some() {
+                matrix(0.0)
+            } else {
+                full
+            };
+            (full, observed)
         }
     }
 }

@@ -6,7 +6,7 @@
 
 use crate::fast_math::{sin_cos, sin_cos_x4};
 use crate::geom::Vec2;
-use crate::scan::{Beam, Scan};
+use crate::scan::{AngularOrder, Beam, Scan};
 use core::f32::consts::TAU;
 use wide::f32x4;
 
@@ -193,19 +193,13 @@ fn points_of_valid_beams(beams: &[Beam], points: &mut [Vec2], bearings: &mut [f3
 /// beyond a turn; the slow path of [`PreparedScan::load`], taken only for a scan it refuses.
 #[cold]
 fn first_out_of_order(beams: &[Beam]) -> Option<usize> {
-    let mut first = None;
-    let mut prev = f32::NEG_INFINITY;
-    for (i, beam) in beams.iter().enumerate() {
-        if !(beam.valid && beam.range_m.is_finite() && beam.angle_rad.is_finite()) {
-            continue;
-        }
-        let bearing = beam.angle_rad - *first.get_or_insert(beam.angle_rad);
-        if bearing < prev || bearing > TAU + 1e-3 {
-            return Some(i);
-        }
-        prev = bearing;
-    }
-    None
+    let mut order = AngularOrder::default();
+    beams.iter().position(|beam| {
+        beam.valid
+            && beam.range_m.is_finite()
+            && beam.angle_rad.is_finite()
+            && !order.admits(beam.angle_rad)
+    })
 }
 
 #[cfg(test)]

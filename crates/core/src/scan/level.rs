@@ -4,7 +4,8 @@
 //! A tilted scan plane meets vertical walls further away than the horizontal distance (by
 //! 1/cos(tilt)), which the matcher would read as motion. Each hit is rotated by roll and pitch
 //! (ZYX, FLU) and its horizontal range and bearing kept; bearings stay continuous with the
-//! original ones, so the beam order is preserved.
+//! original ones. De-skewing can reorder a few beams while the vehicle moves; those are dropped
+//! so the revolution keeps the angular order the matcher needs.
 //!
 //! This runs on every beam of every revolution (43,000 beams a second from a UTM-30LX), so it
 //! avoids per-beam library trigonometry: a device's beams come at the same angles every
@@ -13,7 +14,7 @@
 //! tilt squared, is a short arctangent series.
 
 use super::sweep::{Sweep, SweepMotion};
-use super::Scan;
+use super::{AngularOrder, Scan};
 
 /// The levelled copy of the scan being matched, and the beam directions it was made with.
 #[derive(Clone, Debug)]
@@ -58,6 +59,7 @@ impl<const N: usize> Leveller<N> {
             });
         let sweep = Sweep::new(motion, first_s, last_s);
         self.level.clear(scan.stamp_s);
+        let mut order = AngularOrder::default();
         for (k, beam) in scan.beams().iter().enumerate() {
             let mut b = *beam;
             if b.valid {
@@ -75,6 +77,11 @@ impl<const N: usize> Leveller<N> {
                 };
                 b.range_m = libm::sqrtf(x * x + y * y);
                 b.angle_rad += turn_between(ca * x + sa * y, ca * y - sa * x);
+                // De-skewing moves a near hit further in bearing than a far one beside it,
+                // and the first and last beams apart by the whole turn's motion: a beam that
+                // falls behind the one before it (hidden, seen from mid-revolution) or past a
+                // full turn (seen again) is dropped, or the matcher would refuse the scan.
+                b.valid = order.admits(b.angle_rad);
             }
             // `level` has the input's capacity, so this cannot fail.
             let _ = self.level.push(b);

@@ -54,6 +54,36 @@ impl Beam {
     }
 }
 
+/// The order the matcher needs of a revolution's valid beams (`matching::prepared`): each
+/// bearing, measured from the first valid beam's, at least the one before and at most a turn
+/// (and a milliradian). Fed the beams one by one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct AngularOrder {
+    first: Option<f32>,
+    previous: f32,
+}
+
+impl Default for AngularOrder {
+    fn default() -> Self {
+        Self {
+            first: None,
+            previous: f32::NEG_INFINITY,
+        }
+    }
+}
+
+impl AngularOrder {
+    /// Whether a valid beam at `angle_rad` keeps the order; if it does, it is the new last one.
+    pub(crate) fn admits(&mut self, angle_rad: f32) -> bool {
+        let bearing = angle_rad - *self.first.get_or_insert(angle_rad);
+        let in_order = bearing >= self.previous && bearing <= core::f32::consts::TAU + 1e-3;
+        if in_order {
+            self.previous = bearing;
+        }
+        in_order
+    }
+}
+
 /// Returned when a scan already holds `N` beams.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ScanFull {

@@ -134,6 +134,29 @@ mod tests {
     }
 
     #[test]
+    fn a_de_skewed_revolution_keeps_the_angular_order_the_matcher_needs() {
+        // Exploring speed: the corrected bearings of the first and last beams overlap, and at
+        // the seam of the beam times (mid-scan) they step backwards.
+        let motion = SweepMotion {
+            velocity_m_s: [0.5, 0.3],
+            yaw_rate_rad_s: 0.0,
+        };
+        let scan = smeared(motion.velocity_m_s, motion.yaw_rate_rad_s);
+        let mut leveller = Leveller::<360>::default();
+        let out = leveller.level(&scan, 0.0, 0.0, motion);
+        let mut order = crate::scan::AngularOrder::default();
+        let kept: usize = out
+            .beams()
+            .iter()
+            .filter(|b| b.valid)
+            .map(|b| usize::from(order.admits(b.angle_rad)))
+            .sum();
+        let valid = out.beams().iter().filter(|b| b.valid).count();
+        assert_eq!(kept, valid, "a kept beam is out of order");
+        assert!((350..360).contains(&valid), "{valid} of 360 beams kept");
+    }
+
+    #[test]
     fn nothing_is_moved_without_beam_times_or_a_finite_motion() {
         let moving = SweepMotion {
             velocity_m_s: [1.0, 0.0],
