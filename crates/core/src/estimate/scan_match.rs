@@ -178,9 +178,9 @@ mod tests {
         assert!(f.is_valid());
     }
 
-    /// A noise with positive variances but a negative eigenvalue (x and y correlated beyond
-    /// 1) is no covariance: fused, it takes more variance out of the position than the filter
-    /// holds.
+    /// A noise with positive variances but a negative eigenvalue (a correlation of x and y
+    /// above one) is no covariance: fused, it takes more variance out of the position than the
+    /// filter holds.
     #[test]
     fn an_indefinite_match_covariance_is_refused_and_the_filter_stays_valid() {
         let mut f = Ekf::new(EkfConfig::default());
