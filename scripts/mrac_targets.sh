@@ -5,9 +5,10 @@
 #     (calm: no gusts, no people), TRACK_SEEDS seeds each from FIRST_SEED; the true error is
 #     split into the estimate's error from the setpoint (what the controller sees and acts on)
 #     and the estimate's error from the truth (what it cannot see);
-#  2. robustness: MRAC over ROBUST_SEEDS seeds for each model error, with
-#     the hall's person walking and the default gusts: crashes, runs that never reached Hold,
-#     adaptive fallbacks and the largest adaptive weight norm (0 seeds: tracking only).
+#  2. robustness: PID and MRAC over ROBUST_SEEDS seeds for each model error, with
+#     the hall's person walking and the default gusts (the storm's instead on its row): crashes,
+#     runs that never reached Hold, runs a failsafe landed, adaptive fallbacks and the largest
+#     adaptive weight norm (0 seeds: tracking only).
 # Prints TSV tables; every run is a plain `plumbline sim ... --json` line you can repeat.
 #   bash scripts/mrac_targets.sh [TRACK_SEEDS] [ROBUST_SEEDS] [JOBS] [FIRST_SEED]
 set -euo pipefail
@@ -47,12 +48,12 @@ plan() {
   plan "$track_seeds" "pid mrac" heavy --no-gusts --no-people --mass-scale 1.3
   plan "$track_seeds" "pid mrac" weak --no-gusts --no-people --weak-motor 1,0.8
   plan "$track_seeds" "pid mrac" heavy-weak --no-gusts --no-people --mass-scale 1.3 --weak-motor 1,0.8
-  plan "$robust_seeds" mrac mass --mass-scale 1.3
-  plan "$robust_seeds" mrac motor --weak-motor 1,0.8
-  plan "$robust_seeds" mrac mass-motor --mass-scale 1.3 --weak-motor 1,0.8
-  plan "$robust_seeds" mrac cg --cg-offset 0.03,0.03
-  plan "$robust_seeds" mrac payload --payload-drop 0.3,30
-  plan "$robust_seeds" mrac storm --gust-storm
+  plan "$robust_seeds" "pid mrac" mass --mass-scale 1.3
+  plan "$robust_seeds" "pid mrac" motor --weak-motor 1,0.8
+  plan "$robust_seeds" "pid mrac" mass-motor --mass-scale 1.3 --weak-motor 1,0.8
+  plan "$robust_seeds" "pid mrac" cg --cg-offset 0.03,0.03
+  plan "$robust_seeds" "pid mrac" payload --payload-drop 0.3,30
+  plan "$robust_seeds" "pid mrac" storm --gust-storm
 } | xargs -P "$jobs" -I{} bash -c '{}'
 
 python3 - "$out" "$robust_seeds" <<'PY'
@@ -92,18 +93,20 @@ if int(sys.argv[2]) == 0:
 
 print()
 print("robustness (square, person walking, gusts)")
-print("error\tcontroller\truns\tcrashed\tdiverged\tnever_held\tfallbacks\tmax_weight_norm\tmean_rms_track_m")
+print("error\tcontroller\truns\tcrashed\tdiverged\tnever_held\tlanded\tfallbacks\tmax_weight_norm\tmean_rms_track_m")
 for name in ["mass", "motor", "mass-motor", "cg", "payload", "storm"]:
-    for controller in ["mrac"]:
+    for controller in ["pid", "mrac"]:
         rs, ok, track = stats(name, controller)
         crashed = sum(1 for r in ok if r["crashed"])
         diverged = sum(1 for r in ok if r["status"] == "diverged")
         never = sum(1 for r in ok if r["mission_delay_s"] is None)
+        # A failsafe that landed the vehicle ended its mission early.
+        landed = sum(1 for r in ok if any(m["mode"] == "land" for m in r["modes"]))
         fallbacks = sum(1 for r in ok if r.get("adaptive_fallback"))
         norms = [r["max_adaptive_weight_norm"] for r in ok if r.get("max_adaptive_weight_norm") is not None]
         norm = f"{max(norms):.3f}" if norms else "-"
         mean = f"{statistics.mean(track):.3f}" if track else "-"
         failed = len(rs) - len(ok)
         runs_text = f"{len(rs)}" + (f" ({failed} no summary)" if failed else "")
-        print(f"{name}\t{controller}\t{runs_text}\t{crashed}\t{diverged}\t{never}\t{fallbacks}\t{norm}\t{mean}")
+        print(f"{name}\t{controller}\t{runs_text}\t{crashed}\t{diverged}\t{never}\t{landed}\t{fallbacks}\t{norm}\t{mean}")
 PY

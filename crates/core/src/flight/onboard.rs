@@ -10,7 +10,7 @@ use super::autopilot::{Autopilot, AutopilotConfig};
 use crate::geom::Pose2;
 use crate::matching::{LidarOdometry, OdometryConfig, OdometryStep};
 use crate::msgs::{EstimatedState, Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
-use crate::scan::level::Leveller;
+use crate::scan::level::{Leveller, ScanPlane};
 use crate::scan::sweep::SweepMotion;
 use crate::scan::Scan;
 
@@ -72,9 +72,14 @@ impl<const N: usize> Onboard<N> {
         let pose = Pose2::new(e.position_m[0], e.position_m[1], e.yaw_rad);
         let prior = self.pose_at_last_scan.map(|before| before.between(pose));
         self.pose_at_last_scan = Some(pose);
-        let level = self
-            .leveller
-            .level(scan, e.roll_rad, e.pitch_rad, sweep_motion(&e, inputs));
+        // The height estimate is of the vehicle; the lidar sits a little above it, which only
+        // makes the floor test stricter.
+        let plane = ScanPlane {
+            roll_rad: e.roll_rad,
+            pitch_rad: e.pitch_rad,
+            height_m: e.position_m[2],
+        };
+        let level = self.leveller.level(scan, plane, sweep_motion(&e, inputs));
         let step = self.odometry.update(level, prior);
         if let OdometryStep::Matched { result, .. } = &step {
             self.rejected_points += u64::from(result.quality.rejected_dynamic);

@@ -67,7 +67,7 @@ impl Sweep {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scan::level::Leveller;
+    use crate::scan::level::{Leveller, ScanPlane};
     use crate::scan::{Beam, Scan};
     use core::f32::consts::TAU;
 
@@ -124,8 +124,8 @@ mod tests {
         };
         let scan = smeared(motion.velocity_m_s, motion.yaw_rate_rad_s);
         let mut leveller = Leveller::<360>::default();
-        let raw = worst_offset(leveller.level(&scan, 0.0, 0.0, SweepMotion::default()));
-        let fixed = worst_offset(leveller.level(&scan, 0.0, 0.0, motion));
+        let raw = worst_offset(leveller.level(&scan, ScanPlane::LEVEL, SweepMotion::default()));
+        let fixed = worst_offset(leveller.level(&scan, ScanPlane::LEVEL, motion));
         assert!(raw > 0.05, "the smear should be visible: {raw} m");
         assert!(
             fixed < 1e-3,
@@ -175,9 +175,9 @@ mod tests {
         }
         let mut leveller = Leveller::<360>::default();
         let still = leveller
-            .level(&untimed, 0.0, 0.0, SweepMotion::default())
+            .level(&untimed, ScanPlane::LEVEL, SweepMotion::default())
             .clone();
-        let out = leveller.level(&untimed, 0.0, 0.0, moving);
+        let out = leveller.level(&untimed, ScanPlane::LEVEL, moving);
         assert!(out.beams() == still.beams(), "untimed beams were moved");
     }
 }
