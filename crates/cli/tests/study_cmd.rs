@@ -39,7 +39,13 @@ fn a_tiny_energy_sweep_writes_its_table_and_plots_and_reproduces_exactly() {
     assert!(out_b.status.success(), "{}", stderr(&out_b));
     assert_eq!(
         entries(&a),
-        ["energy.tsv", "pareto.png", "power.png", "summary.json"]
+        [
+            "energy.tsv",
+            "excess.png",
+            "pareto.png",
+            "power.png",
+            "summary.json"
+        ]
     );
     let table = std::fs::read_to_string(a.join("energy.tsv")).unwrap();
     // The header, the default tuning, and the two settings of the grid.
@@ -69,6 +75,20 @@ fn a_tiny_energy_sweep_writes_its_table_and_plots_and_reproduces_exactly() {
     assert!(error > 0.0 && error < 0.5, "{s}");
     // The F450 hovers on about 130 W; a hold must be near that, not zero or runaway.
     assert!((100.0..170.0).contains(&power), "{s}");
+    // The floor is the flown vehicle's still hover: the hold spends a little above it, and
+    // the bound the summary states is that excess.
+    let floor = pid["default_still_hover_w"].as_f64().unwrap();
+    let over = pid["default_over_still_hover"].as_f64().unwrap();
+    assert!(floor < power && over > 0.0 && over < 0.05, "{s}");
+    let bound = pid["bound"].as_str().unwrap();
+    assert!(
+        bound.contains(&format!("{:.2} %", 100.0 * over)),
+        "{bound} against {over}"
+    );
+    let header: Vec<&str> = rows[0].split('\t').collect();
+    for column in ["still_hover_w", "excess_w", "tilt_w", "predicted_excess_w"] {
+        assert!(header.contains(&column), "{column} missing: {}", rows[0]);
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

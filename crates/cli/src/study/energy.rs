@@ -4,8 +4,8 @@
 //! several seeds; the table, the Pareto plot of energy per minute against RMS hold error and
 //! the power breakdown beside seed 000 Fig. 12 go to `--out`.
 
-use super::energy_plot;
 use super::pareto::{self, Point};
+use super::{energy_plot, energy_table, excess_plot};
 use crate::numeric::{within, Range};
 use crate::plot::write_png;
 use crate::report::{print_summary, CliError, CliResult};
@@ -15,12 +15,14 @@ use plumbline_core::control::cascade::CascadeConfig;
 use plumbline_core::msgs::FlightMode;
 use plumbline_io::output::{self, OutputFile};
 use plumbline_sim::runner::{Recorder, SimConfig, StateSample, Status};
+use plumbline_sim::scenario::score::SETTLE_S;
 use plumbline_sim::scenario::{self, Controller, Gains, Options, GAIN_RANGES};
 use plumbline_sim::sensors::lidar::LidarProfile;
-use plumbline_sim::vehicle::power::power;
+use plumbline_sim::vehicle::dynamics::Dynamics;
+use plumbline_sim::vehicle::hover_excess::{hover_excess, HoverExcess};
+use plumbline_sim::vehicle::still_hover::StillHover;
 use plumbline_sim::vehicle::VehicleParams;
 use serde_json::json;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -31,7 +33,7 @@ const ENERGY_SAVING: f64 = 0.1;
 
 #[derive(Args, Debug)]
 pub struct EnergyArgs {
-    /// Directory for energy.tsv, summary.json, pareto.png and power.png.
+    /// Directory for energy.tsv, summary.json, pareto.png, power.png and excess.png.
     #[arg(long)]
     pub out: PathBuf,
     /// Controllers to sweep, comma separated.
@@ -91,18 +93,22 @@ struct Run {
     error_m: Option<f64>,
     /// Per minute of flight, Wh/min: motors, ESCs, avionics.
     parts_wh_min: [f64; 3],
-    /// Mean electrical power from the start of the hold to the end, W.
+    /// Mean electrical power over the scored hold (from the settling after Hold is entered to
+    /// the end), from the energy integrated at every physics step, W.
     hold_power_w: f64,
+    /// The hold's mean power above the flown body's still hover, and why.
+    excess: HoverExcess,
     jitter: f64,
 }
 
-/// Keeps the power samples of a flight (50 Hz), for the hold phase's mean power.
+/// Keeps the state samples of a flight (50 Hz), for the hold phase's power and its excess
+/// over the still hover.
 #[derive(Default)]
-struct PowerSamples(Vec<(f64, f64)>);
+struct StateSamples(Vec<StateSample>);
 
-impl Recorder for PowerSamples {
+impl Recorder for StateSamples {
     fn state(&mut self, s: &StateSample) {
-        self.0.push((s.t_s, s.power_w));
+        self.0.push(*s);
     }
 }
 
@@ -116,6 +122,7 @@ pub struct Row {
     /// Whole flight (ground, takeoff, hold), per minute: motors, ESCs, avionics, Wh/min.
     pub parts_wh_min: [f64; 3],
     pub hold_power_w: f64,
+    pub excess: HoverExcess,
     pub jitter: f64,
     pub failed: usize,
 }
@@ -175,7 +182,7 @@ fn fly(args: &EnergyArgs, setting: Setting, seed: u64) -> Result<Run, CliError> 
     let flight = entry
         .prepare(&options, &mut config)
         .map_err(|e| CliError(format!("--controller {}: {e}", setting.controller.name())))?;
-    let mut samples = PowerSamples::default();
+    let mut samples = StateSamples::default();
     let report =
         scenario::fly(&config, flight, &mut samples).map_err(|e| CliError(format!("room: {e}")))?;
     let out = &report.outcome;
@@ -183,20 +190,26 @@ fn fly(args: &EnergyArgs, setting: Setting, seed: u64) -> Result<Run, CliError> 
     let e = &out.energy;
     let held = matches!(out.status, Status::Completed);
     let log = report.onboard.as_ref();
+    // The window the hold error is scored on: from the end of the climb's transient.
     let hold_from_s = log
         .and_then(|l| l.modes.iter().find(|(_, m)| *m == FlightMode::Hold))
-        .map_or(f64::INFINITY, |(t, _)| *t);
-    let hold_power_w = mean(
-        samples
-            .0
-            .iter()
-            .filter(|(t, _)| *t >= hold_from_s)
-            .map(|(_, p)| *p),
-    );
+        .map_or(f64::INFINITY, |(t, _)| *t + SETTLE_S);
+    let hold = &samples.0[samples.0.partition_point(|s| s.t_s < hold_from_s)..];
+    let floor = out.still_hover.as_ref().ok_or_else(|| {
+        CliError(format!(
+            "seed {seed}: the vehicle has no balanced still hover to measure against"
+        ))
+    })?;
+    let excess = hover_excess(&config.vehicle, floor, hold).unwrap_or(HoverExcess {
+        floor_w: floor.power.total_w(),
+        measured_w: f64::NAN,
+        ..HoverExcess::default()
+    });
     Ok(Run {
         error_m: report.score.hold.filter(|_| held).map(|h| h.rms_m),
         parts_wh_min: [e.motors_wh, e.escs_wh, e.avionics_wh].map(|x| x / minutes),
-        hold_power_w,
+        hold_power_w: excess.floor_w + excess.measured_w,
+        excess,
         jitter: log.and_then(|l| l.motor_jitter()).unwrap_or(f64::NAN),
     })
 }
@@ -250,6 +263,7 @@ fn aggregate(setting: Setting, runs: &[Run]) -> Row {
     let parts_wh_min = [0, 1, 2].map(|i| mean(runs.iter().map(|r| r.parts_wh_min[i])));
     let hold_power_w = mean(runs.iter().map(|r| r.hold_power_w));
     Row {
+        excess: HoverExcess::mean(runs.iter().map(|r| &r.excess)),
         setting,
         point: Point {
             error_m,
@@ -263,60 +277,51 @@ fn aggregate(setting: Setting, runs: &[Run]) -> Row {
     }
 }
 
-/// A gain as the table prints it: the value, or `default`.
-fn gain(v: Option<f32>) -> String {
-    v.map_or("default".into(), |v| v.to_string())
-}
-
-fn table(rows: &[Row], front: &[usize]) -> String {
-    let mut t = String::from(
-        "controller\tposition_kp\tvelocity_kp\tcommand_tau_s\tfailed\trms_hold_error_m\t\
-         hold_energy_wh_per_min\tflight_motors_wh_per_min\tflight_escs_wh_per_min\t\
-         flight_avionics_wh_per_min\thold_power_w\tmotor_jitter\tpareto\n",
-    );
-    for (i, r) in rows.iter().enumerate() {
-        let g = &r.setting.gains;
-        let [m, e, a] = r.parts_wh_min;
-        let _ = writeln!(
-            t,
-            "{}\t{}\t{}\t{}\t{}\t{:.5}\t{:.5}\t{m:.5}\t{e:.5}\t{a:.5}\t{:.3}\t{:.4}\t{}",
-            r.setting.controller.name(),
-            gain(g.position_kp),
-            gain(g.velocity_kp),
-            gain(g.command_tau_s),
-            r.failed,
-            r.point.error_m,
-            r.point.energy_wh_min,
-            r.hold_power_w,
-            r.jitter,
-            front.contains(&i),
-        );
-    }
-    t
-}
-
-/// Power of a perfectly still hover of `vehicle` (every rotor at the nominal hover speed, no
-/// speed changes), W: the yardstick for what control costs. Rotor power grows as thrust^1.5,
-/// so holding the weight up with uneven or changing thrust costs more; what control could save
-/// is at most the distance from this line (gusts and drag shift the real hover slightly).
-pub fn still_hover_w(vehicle: &VehicleParams) -> f64 {
-    let w = vehicle.hover_rotor_speed();
-    power(vehicle, &[w; 4], &[0.0; 4]).total_w()
-}
-
 /// One controller's figures against its own default (`rows[0]`), and whether it meets the
 /// question's target.
-fn controller_summary(rows: &[Row], still_hover_w: f64) -> (serde_json::Value, bool) {
+/// How well the second-order model (3/8 Var(T)/W², the tilt, the rotors' uneven split) predicts
+/// the measured excess over the settings that held: the largest and the mean difference, W.
+fn excess_check(rows: &[Row]) -> serde_json::Value {
+    let held: Vec<&Row> = rows.iter().filter(|r| r.failed == 0).collect();
+    let diff = |r: &&Row| r.excess.predicted_w - r.excess.measured_w;
+    json!({
+        "settings": held.len(),
+        "largest_abs_predicted_minus_measured_w":
+            held.iter().map(|r| diff(r).abs()).fold(0.0, f64::max),
+        "mean_predicted_minus_measured_w": mean(held.iter().map(diff)),
+        "measured_excess_range_w": [
+            held.iter().map(|r| r.excess.measured_w).fold(f64::INFINITY, f64::min),
+            held.iter().map(|r| r.excess.measured_w).fold(f64::NEG_INFINITY, f64::max),
+        ],
+    })
+}
+
+fn controller_summary(rows: &[Row]) -> (serde_json::Value, bool) {
     let points: Vec<Point> = rows.iter().map(|r| r.point).collect();
     let verdict = pareto::verdict(&points, 0, ERROR_SLACK, ENERGY_SAVING);
     let d = &rows[0];
     let total: f64 = d.parts_wh_min.iter().sum();
     let best = verdict.best_within_slack.map(|i| &rows[i]);
+    // Any setting's hold power is at least the floor, so it saves at most the default's excess.
+    let saving_bound = d.excess.measured_w / d.hold_power_w;
     let value = json!({
         "default_rms_hold_error_m": d.point.error_m,
         "default_hold_energy_wh_per_min": d.point.energy_wh_min,
         "default_hold_power_w": d.hold_power_w,
-        "default_over_still_hover": d.hold_power_w / still_hover_w - 1.0,
+        "default_still_hover_w": d.excess.floor_w,
+        "default_over_still_hover": d.excess.measured_fraction(),
+        "default_excess_w": d.excess.measured_w,
+        "default_excess_parts_w": d.excess.parts().iter()
+            .map(|(name, w)| (name.to_string(), json!(w)))
+            .collect::<serde_json::Map<_, _>>(),
+        "largest_possible_saving": saving_bound,
+        "bound": format!(
+            "the default spends {:.2} % above the still-hover floor, so no tuning can save more \
+             than {:.2} %",
+            100.0 * d.excess.measured_fraction(),
+            100.0 * saving_bound,
+        ),
+        "excess_check": excess_check(rows),
         "default_power_fraction": d.parts_wh_min.map(|p| p / total),
         "failed_settings": rows.iter().filter(|r| r.failed > 0).count(),
         "best_saving_within_10pct_error": verdict.saving_within_slack,
@@ -333,6 +338,15 @@ fn controller_summary(rows: &[Row], still_hover_w: f64) -> (serde_json::Value, b
     (value, verdict.met)
 }
 
+/// The still hover of the nominal airframe (identical rotors), W.
+fn nominal_still_hover_w() -> Result<f64, CliError> {
+    let v = VehicleParams::f450();
+    let dynamics = Dynamics::new(&v, [1.0; 4], 1e-3);
+    StillHover::of(&v, &dynamics)
+        .map(|h| h.power.total_w())
+        .ok_or_else(|| CliError("the nominal vehicle has no still hover".into()))
+}
+
 fn stage(dir: &Path, name: &str) -> Result<OutputFile, CliError> {
     Ok(OutputFile::stage(&dir.join(name))?)
 }
@@ -345,9 +359,10 @@ pub fn run(args: EnergyArgs) -> CliResult {
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     std::fs::create_dir_all(&args.out)
         .map_err(|e| CliError(format!("--out {}: {e}", args.out.display())))?;
-    let (pareto_png, power_png) = (
+    let (pareto_png, power_png, excess_png) = (
         stage(&args.out, "pareto.png")?,
         stage(&args.out, "power.png")?,
+        stage(&args.out, "excess.png")?,
     );
     let runs = fly_all(&args, &settings, threads)?;
     let rows: Vec<Row> = settings
@@ -357,10 +372,12 @@ pub fn run(args: EnergyArgs) -> CliResult {
         .collect();
     let points: Vec<Point> = rows.iter().map(|r| r.point).collect();
     let front = pareto::front(&points);
-    let floor_w = still_hover_w(&VehicleParams::f450());
+    // Every setting flies the same seeds, so the same bodies: one floor for all.
+    let floor_w = rows[0].excess.floor_w;
+    let nominal_w = nominal_still_hover_w()?;
     output::write(
         &args.out.join("energy.tsv"),
-        table(&rows, &front).as_bytes(),
+        energy_table::table(&rows, &front).as_bytes(),
     )?;
     write_png(pareto_png, |p| {
         energy_plot::pareto(p, &rows, &front, floor_w / 60.0)
@@ -371,11 +388,14 @@ pub fn run(args: EnergyArgs) -> CliResult {
         .min_by(|&a, &b| points[a].energy_wh_min.total_cmp(&points[b].energy_wh_min))
         .map(|i| &rows[i]);
     write_png(power_png, |p| energy_plot::breakdown(p, &rows[0], lowest))?;
+    write_png(excess_png, |p| {
+        excess_plot::excess(p, &rows, ENERGY_SAVING * rows[0].hold_power_w)
+    })?;
     // Each controller's settings are contiguous, its default first (see `settings`).
     let per_controller: Vec<(&str, serde_json::Value, bool)> = rows
         .chunk_by(|a, b| a.setting.controller == b.setting.controller)
         .map(|chunk| {
-            let (value, met) = controller_summary(chunk, floor_w);
+            let (value, met) = controller_summary(chunk);
             (chunk[0].setting.controller.name(), value, met)
         })
         .collect();
@@ -386,6 +406,15 @@ pub fn run(args: EnergyArgs) -> CliResult {
         "scenario": args.scenario,
         "duration_s": args.duration,
         "still_hover_power_w": floor_w,
+        "still_hover_power_per_seed_w": runs[..args.seeds as usize]
+            .iter()
+            .map(|r| r.excess.floor_w)
+            .collect::<Vec<_>>(),
+        "nominal_still_hover_power_w": nominal_w,
+        "still_hover_note": "the floor is each flown vehicle's still hover, its seed's rotor \
+            thrust mismatch included (a rotor giving more thrust at a given speed carries its \
+            share on less power), averaged over the seeds; the nominal figure is the airframe \
+            with identical rotors",
         "pareto_settings": front.len(),
         "failed_settings": rows.iter().filter(|r| r.failed > 0).count(),
         "controllers": per_controller

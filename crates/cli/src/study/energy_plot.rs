@@ -47,9 +47,7 @@ pub fn pareto(
         let pad = 0.1 * (w1 - lo).max(1e-4);
         (lo - pad, w1 + pad)
     };
-    let root = BitMapBackend::new(path, (1000, 700)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let labels = fonts_available();
+    let (root, labels) = canvas(path, (1000, 700))?;
     let mut builder = titled(
         &root,
         labels,
@@ -72,26 +70,12 @@ pub fn pareto(
     ))?;
     if labels {
         floor
-            .label("still hover at nominal rotor speed")
+            .label("still hover of the flown vehicles (the floor)")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 15, y)], BLACK));
     }
-    for c in [Controller::Pid, Controller::Mrac] {
-        let pts: Vec<(f64, f64)> = held
-            .iter()
-            .filter(|r| r.setting.controller == c)
-            .map(|r| (r.point.error_m, r.point.energy_wh_min))
-            .collect();
-        if pts.is_empty() {
-            continue;
-        }
-        let col = color(c);
-        let drawn = chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, col.filled())))?;
-        if labels {
-            drawn
-                .label(c.name())
-                .legend(move |(x, y)| Circle::new((x + 7, y), 4, col.filled()));
-        }
-    }
+    dots(&mut chart, &held, labels, |r| {
+        (r.point.error_m, r.point.energy_wh_min)
+    })?;
     let line: Vec<(f64, f64)> = front
         .iter()
         .map(|&i| (rows[i].point.error_m, rows[i].point.energy_wh_min))
@@ -102,20 +86,12 @@ pub fn pareto(
             .label("Pareto front")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 15, y)], BLACK.stroke_width(2)));
     }
-    if let Some(d) = rows.first().filter(|r| r.point.error_m.is_finite()) {
-        let drawn = chart.draw_series([Circle::new(
-            (d.point.error_m, d.point.energy_wh_min),
-            9,
-            RED.stroke_width(2),
-        )])?;
-        if labels {
-            drawn
-                .label("default tuning")
-                .legend(|(x, y)| Circle::new((x + 7, y), 6, RED.stroke_width(2)));
-        }
-    }
+    let default = rows.first().filter(|r| r.point.error_m.is_finite());
+    rings(&mut chart, default, labels, "default tuning", |r| {
+        (r.point.error_m, r.point.energy_wh_min)
+    })?;
     if labels {
-        legend(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     }
     root.present()?;
     Ok(())
@@ -135,9 +111,7 @@ pub fn breakdown(path: &Path, default: &Row, lowest: Option<&Row>) -> Result<(),
     if let Some(r) = lowest {
         groups.push(("simulated, lowest-energy setting", fractions(r)));
     }
-    let root = BitMapBackend::new(path, (1000, 600)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let labels = fonts_available();
+    let (root, labels) = canvas(path, (1000, 600))?;
     let mut builder = titled(
         &root,
         labels,
@@ -183,29 +157,89 @@ pub fn breakdown(path: &Path, default: &Row, lowest: Option<&Row>) -> Result<(),
         }
     }
     if labels {
-        legend(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     }
     root.present()?;
     Ok(())
 }
 
-type Chart<'a, 'b> =
+pub(super) type Chart<'a, 'b> =
     ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
-/// The series labels in the upper right corner, on a light box.
-fn legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<(), Box<dyn Error>> {
+/// The series labels in the `corner` where the data leave room, on a light box.
+pub(super) fn legend<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    corner: SeriesLabelPosition,
+) -> Result<(), Box<dyn Error>> {
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(corner)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()?;
     Ok(())
 }
 
+/// A white picture of `size` pixels at `path`, and whether text can be drawn on it.
+pub(super) fn canvas(
+    path: &Path,
+    size: (u32, u32),
+) -> Result<(DrawingArea<BitMapBackend<'_>, Shift>, bool), Box<dyn Error>> {
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE)?;
+    Ok((root, fonts_available()))
+}
+
+/// Each controller's `rows` as dots at `at(row)`, in its colour, labelled by its name.
+pub(super) fn dots<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    rows: &[&Row],
+    labels: bool,
+    at: impl Fn(&Row) -> (f64, f64),
+) -> Result<(), Box<dyn Error>> {
+    for c in [Controller::Pid, Controller::Mrac] {
+        let pts: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.setting.controller == c)
+            .map(|r| at(r))
+            .collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let col = color(c);
+        let drawn = chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 4, col.filled())))?;
+        if labels {
+            drawn
+                .label(c.name())
+                .legend(move |(x, y)| Circle::new((x + 7, y), 4, col.filled()));
+        }
+    }
+    Ok(())
+}
+
+/// Red rings around `rows` at `at(row)`, labelled `what`.
+pub(super) fn rings<'a, 'b: 'a, 'r>(
+    chart: &mut Chart<'a, 'b>,
+    rows: impl IntoIterator<Item = &'r Row>,
+    labels: bool,
+    what: &str,
+    at: impl Fn(&Row) -> (f64, f64),
+) -> Result<(), Box<dyn Error>> {
+    let drawn = chart.draw_series(
+        rows.into_iter()
+            .map(|r| Circle::new(at(r), 9, RED.stroke_width(2))),
+    )?;
+    if labels {
+        drawn
+            .label(what)
+            .legend(|(x, y)| Circle::new((x + 7, y), 6, RED.stroke_width(2)));
+    }
+    Ok(())
+}
+
 /// The study charts' builder on `root`: their margin and, when text can be drawn (`labels`),
 /// the caption and room for the (x, y) axis labels; without fonts the plot keeps the space.
-fn titled<'a, 'b>(
+pub(super) fn titled<'a, 'b>(
     root: &'a DrawingArea<BitMapBackend<'b>, Shift>,
     labels: bool,
     caption: &str,

@@ -3,6 +3,8 @@
 
 mod energy;
 mod energy_plot;
+mod energy_table;
+mod excess_plot;
 mod paper;
 mod pareto;
 

@@ -22,6 +22,7 @@ use crate::sensors::sonar::Sonar;
 use crate::vehicle::battery::{Battery, BatteryLevel};
 use crate::vehicle::dynamics::{BodyState, Dynamics, Forcing};
 use crate::vehicle::power::{power, EnergyTally};
+use crate::vehicle::still_hover::StillHover;
 use crate::vehicle::GRAVITY;
 use crate::world::clearance::ClearanceWatch;
 use crate::world::scene::{Cylinder, Scene};
@@ -188,8 +189,9 @@ impl<'c> Lockstep<'c> {
             battery_low_at_s: None,
             min_clearance_m: f64::INFINITY,
             distance_flown_m: 0.0,
+            still_hover: None,
         };
-        let run = Self {
+        let mut run = Self {
             config,
             hz,
             dt,
@@ -219,7 +221,9 @@ impl<'c> Lockstep<'c> {
             t: 0.0,
         };
         let body = config.model_error.body(v, true);
-        Ok((run, Dynamics::with_body(v, &body, mismatch, dt), s))
+        let dynamics = Dynamics::with_body(v, &body, mismatch, dt);
+        run.out.still_hover = StillHover::of(v, &dynamics);
+        Ok((run, dynamics, s))
     }
 
     /// The physics step at which the body changes (the model error's payload release).
@@ -271,7 +275,7 @@ impl<'c> Lockstep<'c> {
         self.sense(s, velocity_before, recorder);
         if self.k == self.schedule.state_due {
             self.schedule.state_due += self.schedule.state_every;
-            self.record_state(s, power_w, recorder);
+            self.record_state(dynamics, s, power_w, recorder);
         }
         Ok(())
     }
@@ -441,7 +445,13 @@ impl<'c> Lockstep<'c> {
 
     /// A snapshot for plots and progress, at [`STATE_RATE_HZ`].
     #[inline(always)]
-    fn record_state(&self, s: &BodyState, power_w: f64, recorder: &mut dyn Recorder) {
+    fn record_state(
+        &self,
+        dynamics: &Dynamics,
+        s: &BodyState,
+        power_w: f64,
+        recorder: &mut dyn Recorder,
+    ) {
         let (roll, pitch, yaw) = s.attitude.to_euler();
         recorder.state(&StateSample {
             t_s: self.t,
@@ -450,6 +460,9 @@ impl<'c> Lockstep<'c> {
             euler: [roll, pitch, yaw],
             battery_v: self.battery.voltage_v,
             power_w,
+            energy_wh: self.energy.total_wh(),
+            rotor_speed: s.rotor_speed,
+            thrust_n: dynamics.thrusts(s).iter().sum(),
         });
     }
 

@@ -4,6 +4,7 @@
 use crate::math::{Quat, Vec3};
 use crate::sensors::lidar::LidarScan;
 use crate::vehicle::power::EnergyTally;
+use crate::vehicle::still_hover::StillHover;
 use plumbline_core::msgs::{ImuSample, SonarSample};
 
 /// The true 3-D pose of the vehicle at an instant.
@@ -23,7 +24,15 @@ pub struct StateSample {
     /// Roll, pitch, yaw, rad.
     pub euler: [f64; 3],
     pub battery_v: f64,
+    /// Electrical power at this physics step, W.
     pub power_w: f64,
+    /// Energy drawn since the start, integrated at every physics step, Wh: the difference of
+    /// two samples is the exact energy between them, which a mean of the sampled powers is not.
+    pub energy_wh: f64,
+    /// Rotor speeds Ω_i, rad/s.
+    pub rotor_speed: [f64; 4],
+    /// Total rotor thrust along body z, N.
+    pub thrust_n: f64,
 }
 
 pub const STATE_RATE_HZ: f64 = 50.0;
@@ -70,6 +79,9 @@ pub struct Outcome {
     /// Smallest distance from the centre to a wall, capped at [`CLEARANCE_CAP_M`].
     pub min_clearance_m: f64,
     pub distance_flown_m: f64,
+    /// The body's still hover at the start (see [`StillHover`]): the floor under the mean
+    /// power of a flight that holds its place. `None` when the body cannot hover balanced.
+    pub still_hover: Option<StillHover>,
 }
 
 /// Clearance is searched only this far (grid cells around the vehicle), m.

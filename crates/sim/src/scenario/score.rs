@@ -29,7 +29,7 @@ use std::rc::Rc;
 const AIRBORNE_M: f64 = 0.3;
 /// Hold error is scored from this long after Hold is entered: the end of the climb is a
 /// transient, not station keeping, s.
-const SETTLE_S: f64 = 2.0;
+pub const SETTLE_S: f64 = 2.0;
 /// Time after a push that is left out of the hold error (seed 000's recovery target); the
 /// push itself is scored by [`OnboardScore::push_max_error_m`] and
 /// [`OnboardScore::recovery_s`], s.

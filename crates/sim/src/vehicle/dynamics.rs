@@ -197,6 +197,18 @@ impl Dynamics {
         }
     }
 
+    /// The four linear rows in Ω_i² that a hover must satisfy (total thrust, roll, pitch and
+    /// yaw moment), and the weight the first must equal, N: see [`crate::vehicle::still_hover`].
+    pub(crate) fn hover_rows(&self) -> ([[f64; 4]; 4], f64) {
+        let rows = [
+            self.thrust_coeff,
+            self.roll_coeff,
+            self.pitch_coeff,
+            self.yaw_coeff,
+        ];
+        (rows, GRAVITY / self.inv_mass)
+    }
+
     /// Thrust of each rotor, τ_i = k_T Ω_i², N.
     pub fn thrusts(&self, s: &BodyState) -> [f64; 4] {
         core::array::from_fn(|i| self.thrust_coeff[i] * s.rotor_speed[i] * s.rotor_speed[i])

@@ -1,6 +1,8 @@
 //! The vehicle: its parameters (this module: mass properties, rotor layout, motors, drag,
 //! battery and power, with two documented presets and TOML loading), its rigid-body
-//! [`dynamics`], the [`motors`], the [`battery`] and the electrical [`power`] it draws.
+//! [`dynamics`], the [`motors`], the [`battery`] and the electrical [`power`] it draws; its
+//! [`still_hover`], the least power that holds it in place, and a flight's [`hover_excess`]
+//! over it.
 //!
 //! Rotor numbering and spin follow seed 002 eqs. 15-19, rewritten from the seed's z-down body
 //! frame into Plumbline's FLU frame (DESIGN.md §3): in the square (X) configuration rotor 1 is
@@ -10,9 +12,11 @@
 
 pub mod battery;
 pub mod dynamics;
+pub mod hover_excess;
 pub mod model_error;
 pub mod motors;
 pub mod power;
+pub mod still_hover;
 
 use crate::math::Vec3;
 use battery::BatteryParams;
