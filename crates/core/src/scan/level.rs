@@ -35,10 +35,11 @@ pub struct FloorReturns {
     pub height_tolerance_m: f32,
     /// Error allowed in the estimated tilt, rad. In the simulator's gust storm the tilt
     /// estimate is 0.7 degrees off (RMS, 2-3 at worst), against 0.25 in still air. It costs
-    /// real walls: on the square's braking tilt the far walls' low hits go, and the calm track
-    /// error rises by about 1 cm. At 0.03 rad (and 0.1 m) that cost was gone, but enough floor
-    /// let through in the storm to put one seed's estimate 0.85 m off and the vehicle within
-    /// 0.24 m of a wall.
+    /// real walls: a wall's foot closer to the floor than the tolerance is dropped too, which
+    /// a tilted vehicle flying low sees at a few metres. Both sides bind near 0.04 rad: at
+    /// 0.05 an exploration flight at exploring height lost enough wall feet for its estimate
+    /// to go invalid, at 0.03 enough floor got through in the storm to put one seed's estimate
+    /// 0.9 m off. A tolerance from the attitude estimate's own variance would serve both.
     pub tilt_tolerance_rad: f32,
     /// Below this height (m) a wall's foot and the floor cannot be told apart at the tolerances
     /// above, so no return is dropped: on the ground and early in a climb the scan is kept whole.
@@ -49,7 +50,7 @@ impl Default for FloorReturns {
     fn default() -> Self {
         Self {
             height_tolerance_m: 0.15,
-            tilt_tolerance_rad: 0.05,
+            tilt_tolerance_rad: 0.04,
             min_height_m: 0.5,
         }
     }
