@@ -334,6 +334,44 @@ pub struct CompanionMessages {
     pub path_home_m: Option<f32>,
 }
 
+/// What a ground station asks of the vehicle (MAVLink COMMAND_LONG and MANUAL_CONTROL on the
+/// wire), after the link layer has checked the target system and, with a key, the signature.
+///
+/// Plain values so the flight part never sees the wire format; the autopilot decides whether a
+/// command is allowed in the current mode and the link reports that back (COMMAND_ACK).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GroundCommand {
+    Arm,
+    Disarm,
+    /// Take off and hold; `None` keeps the configured hold height (m above the take-off floor).
+    Takeoff { height_m: Option<f32> },
+    Land,
+    /// Fly back to the take-off point and land.
+    Return,
+    SetMode(GroundMode),
+    /// Flight termination, the remote kill switch: motors off at the next control step.
+    Terminate,
+    /// Manual takeover sticks, in the radio's conventions (see [`PilotInput`]).
+    Sticks(GroundSticks),
+}
+
+/// The autonomous and manual modes a ground station may select.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GroundMode {
+    Hold,
+    Explore,
+    Manual,
+}
+
+/// Stick positions from a ground station (MANUAL_CONTROL), normalised like [`PilotInput`]'s.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GroundSticks {
+    pub roll_norm: f32,
+    pub pitch_norm: f32,
+    pub yaw_norm: f32,
+    pub throttle_norm: f32,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
