@@ -98,10 +98,17 @@ fn a_silent_station_sees_every_step_and_changes_nothing() {
             kill_at_s: None,
         }),
     );
-    assert_eq!(alone, watched, "a station that sends nothing changed the flight");
+    assert_eq!(
+        alone, watched,
+        "a station that sends nothing changed the flight"
+    );
     let seen = seen.borrow();
     // Every onboard step (500 Hz) is reported once, in order.
-    assert!((2995..=3001).contains(&seen.times.len()), "{}", seen.times.len());
+    assert!(
+        (2995..=3001).contains(&seen.times.len()),
+        "{}",
+        seen.times.len()
+    );
     assert!(seen.times.windows(2).all(|w| w[1] > w[0]));
     // The reported modes are the log's, and the logged mode changes arrive as events.
     assert_eq!(seen.modes.last(), Some(&watched.final_mode()));
@@ -128,7 +135,11 @@ fn a_kill_from_the_ground_stops_the_motors_at_the_next_step() {
     let seen = seen.borrow();
     let sent = seen.times.iter().position(|&t| t >= 4.0).unwrap();
     // Sent after step `sent`: the autopilot acts on it at step `sent + 1`.
-    assert_ne!(seen.modes[sent], FlightMode::Killed, "killed before it was sent");
+    assert_ne!(
+        seen.modes[sent],
+        FlightMode::Killed,
+        "killed before it was sent"
+    );
     assert_eq!(seen.modes[sent + 1], FlightMode::Killed);
     assert_eq!(log.final_mode(), FlightMode::Killed);
     let killed_at = log.modes.last().unwrap().0;

@@ -275,10 +275,9 @@ impl<const N: usize> OnboardLink<N> {
                 m.setpoint(frame.t_s - shift)
             }),
             companion: messages,
-            ground: self
-                .ground
-                .as_mut()
-                .map_or(GroundMessages::default(), |g| core::mem::take(&mut g.uplink)),
+            ground: self.ground.as_mut().map_or(GroundMessages::default(), |g| {
+                core::mem::take(&mut g.uplink)
+            }),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         if let Some(ground) = self.ground.as_mut() {
@@ -364,7 +363,10 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
         self.step_with(frame, dt_s, None)
     }
 
-    fn link_ground(&mut self, station: Box<dyn GroundStation>) -> Result<(), Box<dyn GroundStation>> {
+    fn link_ground(
+        &mut self,
+        station: Box<dyn GroundStation>,
+    ) -> Result<(), Box<dyn GroundStation>> {
         self.link_ground_station(station);
         Ok(())
     }
@@ -397,7 +399,10 @@ impl<const N: usize> FlightSoftware for WithCompanion<'_, N> {
         self.link.step_with(frame, dt_s, Some(&mut *self.companion))
     }
 
-    fn link_ground(&mut self, station: Box<dyn GroundStation>) -> Result<(), Box<dyn GroundStation>> {
+    fn link_ground(
+        &mut self,
+        station: Box<dyn GroundStation>,
+    ) -> Result<(), Box<dyn GroundStation>> {
         self.link.link_ground_station(station);
         Ok(())
     }
