@@ -8,7 +8,9 @@
 //! as it does alone.
 
 use plumbline_core::flight::events::{Event, EventLog};
-use plumbline_core::msgs::{BatterySample, GroundCommand, GroundMessages, Outputs, SonarSample};
+use plumbline_core::msgs::{
+    BatterySample, GroundCommand, GroundMessages, ImuSample, Outputs, SonarSample,
+};
 use plumbline_core::scan::Beam;
 use std::collections::VecDeque;
 
@@ -20,6 +22,8 @@ pub struct VehicleReport<'a> {
     pub t_s: f64,
     /// What the autopilot returned: mode, failsafe, estimate, motors, setpoint.
     pub outputs: &'a Outputs,
+    /// The newest IMU sample (body FLU; the gyro gives the body rates).
+    pub imu: ImuSample,
     /// The battery as measured at this step.
     pub battery: BatterySample,
     /// A sonar reading, if one arrived since the previous step.

@@ -273,6 +273,7 @@ impl<const N: usize> OnboardLink<N> {
             let report = VehicleReport {
                 t_s: frame.t_s,
                 outputs: &out,
+                imu: self.last_imu,
                 battery: frame.battery,
                 sonar: frame.sonar,
                 scan: scan.map(|s| s.beams()),
