@@ -430,7 +430,7 @@ fn a_lost_ground_link_stops_a_mission_where_it_is() {
     let mut c = Companion::new();
     let mut f = explore(31, &mut c);
     c.goal = Some(Goal::Point([1.5, 1.0]));
-    let mut linked = |f: &mut Flight, c: &mut Companion, secs, hb| {
+    let linked = |f: &mut Flight, c: &mut Companion, secs, hb| {
         f.fly_with(
             secs,
             |i, v| (c.send(i, v), i.ground.heartbeat = hb).1,
