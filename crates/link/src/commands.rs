@@ -5,27 +5,16 @@ use crate::modes::command_for_custom_mode;
 use mavlink::dialects::common::{
     MavCmd, MavModeFlag, MavResult, COMMAND_ACK_DATA, COMMAND_LONG_DATA, MANUAL_CONTROL_DATA,
 };
-use plumbline_core::msgs::{GroundCommand, GroundSticks};
+use plumbline_core::msgs::{CommandResult, GroundCommand, GroundSticks};
 
-/// What the autopilot made of a command, as COMMAND_ACK reports it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CommandResult {
-    /// Done, or started.
-    Accepted,
-    /// Understood but not allowed now or with these parameters (arming in flight, an
-    /// unselectable mode); repeating it unchanged will not help.
-    Denied,
-    /// Not a command this vehicle implements.
-    Unsupported,
-}
-
-impl CommandResult {
-    pub(crate) fn mav_result(self) -> MavResult {
-        match self {
-            CommandResult::Accepted => MavResult::MAV_RESULT_ACCEPTED,
-            CommandResult::Denied => MavResult::MAV_RESULT_DENIED,
-            CommandResult::Unsupported => MavResult::MAV_RESULT_UNSUPPORTED,
-        }
+/// MAV_RESULT for the autopilot's answer: carried out is ACCEPTED; refused in the current
+/// mode or state is TEMPORARILY_REJECTED (the same command may succeed later); a bad
+/// parameter is DENIED (repeating it unchanged will not help).
+pub(crate) fn mav_result(result: CommandResult) -> MavResult {
+    match result {
+        CommandResult::Accepted => MavResult::MAV_RESULT_ACCEPTED,
+        CommandResult::Refused(_) => MavResult::MAV_RESULT_TEMPORARILY_REJECTED,
+        CommandResult::InvalidParameter => MavResult::MAV_RESULT_DENIED,
     }
 }
 
@@ -48,14 +37,16 @@ impl AckTo {
 /// DO_FLIGHTTERMINATION terminates when param1 is above this (MAVLink's definition).
 const TERMINATE_THRESHOLD: f32 = 0.5;
 
-/// The core command a COMMAND_LONG asks for, or the result to answer at once when it asks for
-/// nothing the autopilot could do.
-pub(crate) fn ground_command(cmd: &COMMAND_LONG_DATA) -> Result<GroundCommand, CommandResult> {
+/// The core command a COMMAND_LONG asks for, or the result the link answers at once when it
+/// asks for nothing the autopilot could do: UNSUPPORTED for a command Plumbline does not
+/// implement, DENIED for one whose parameters select nothing (an unknown mode, arm with
+/// param1 neither 0 nor 1).
+pub(crate) fn ground_command(cmd: &COMMAND_LONG_DATA) -> Result<GroundCommand, MavResult> {
     match cmd.command {
         MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => match cmd.param1 {
             1.0 => Ok(GroundCommand::Arm),
             0.0 => Ok(GroundCommand::Disarm),
-            _ => Err(CommandResult::Denied),
+            _ => Err(MavResult::MAV_RESULT_DENIED),
         },
         MavCmd::MAV_CMD_NAV_TAKEOFF => {
             // param7 is the altitude; indoors it is the hold height above the take-off floor.
@@ -64,7 +55,7 @@ pub(crate) fn ground_command(cmd: &COMMAND_LONG_DATA) -> Result<GroundCommand, C
             match h {
                 h if h.is_nan() || h == 0.0 => Ok(GroundCommand::Takeoff { height_m: None }),
                 h if h.is_finite() && h > 0.0 => Ok(GroundCommand::Takeoff { height_m: Some(h) }),
-                _ => Err(CommandResult::Denied),
+                _ => Err(MavResult::MAV_RESULT_DENIED),
             }
         }
         MavCmd::MAV_CMD_NAV_LAND => Ok(GroundCommand::Land),
@@ -72,7 +63,7 @@ pub(crate) fn ground_command(cmd: &COMMAND_LONG_DATA) -> Result<GroundCommand, C
         MavCmd::MAV_CMD_DO_FLIGHTTERMINATION if cmd.param1 > TERMINATE_THRESHOLD => {
             Ok(GroundCommand::Terminate)
         }
-        MavCmd::MAV_CMD_DO_FLIGHTTERMINATION => Err(CommandResult::Denied),
+        MavCmd::MAV_CMD_DO_FLIGHTTERMINATION => Err(MavResult::MAV_RESULT_DENIED),
         MavCmd::MAV_CMD_DO_SET_MODE => {
             let base = cmd.param1;
             let custom_flag = f32::from(MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED.bits());
@@ -84,11 +75,11 @@ pub(crate) fn ground_command(cmd: &COMMAND_LONG_DATA) -> Result<GroundCommand, C
                 && custom >= 0.0
                 && custom.fract() == 0.0;
             if !well_formed {
-                return Err(CommandResult::Denied);
+                return Err(MavResult::MAV_RESULT_DENIED);
             }
-            command_for_custom_mode(custom as u32).ok_or(CommandResult::Denied)
+            command_for_custom_mode(custom as u32).ok_or(MavResult::MAV_RESULT_DENIED)
         }
-        _ => Err(CommandResult::Unsupported),
+        _ => Err(MavResult::MAV_RESULT_UNSUPPORTED),
     }
 }
 
@@ -113,10 +104,10 @@ pub(crate) fn sticks(mc: &MANUAL_CONTROL_DATA) -> Option<GroundSticks> {
 }
 
 /// The COMMAND_ACK answering `to`.
-pub(crate) fn ack(to: &AckTo, result: CommandResult) -> COMMAND_ACK_DATA {
+pub(crate) fn ack(to: &AckTo, result: MavResult) -> COMMAND_ACK_DATA {
     COMMAND_ACK_DATA {
         command: to.command,
-        result: result.mav_result(),
+        result,
         progress: 0,
         result_param2: 0,
         target_system: to.system_id,

@@ -27,7 +27,7 @@ mod signing;
 pub mod telemetry;
 mod wire;
 
-pub use commands::{AckTo, CommandResult};
+pub use commands::AckTo;
 pub use counters::DropCounters;
 pub use link::{
     InboundEvent, Link, LinkConfig, LinkTime, Peer, COMPONENT_AUTOPILOT, COMPONENT_ONBOARD_COMPUTER,
@@ -38,4 +38,4 @@ pub use obstacle::{obstacle_distance, sector_of, ObstacleRange, SECTORS};
 pub use odometry::{odometry_from_estimate, odometry_from_pose_fix};
 pub use params::{ParamName, ParamRef, ParamRefusal, ParamRequest, ParameterStore, NAME_LEN};
 pub use signing::{timestamp_from_unix, SigningKey};
-pub use telemetry::{SensorRanges, TelemetryRates, VehicleReport};
+pub use telemetry::{SensorRanges, TelemetryInput, TelemetryRates};

@@ -2,18 +2,18 @@
 //! incoming frames into core's plain commands. Bytes in, bytes out: the caller owns the socket
 //! or serial port and the clock, and passes the time into every call.
 
-use crate::commands::{ack, ground_command, sticks, AckTo, CommandResult};
+use crate::commands::{ack, ground_command, mav_result, sticks, AckTo};
 use crate::counters::DropCounters;
 use crate::obstacle::obstacle_distance;
 use crate::odometry::odometry_from_pose_fix;
 use crate::params::{ParamRef, ParamRequest, ParameterStore, RateLimit};
 use crate::scanner::{Frame, Scanner};
 use crate::signing::{SignatureFault, Signer, SigningKey};
-use crate::telemetry::{statustext, SensorRanges, Telemetry, TelemetryRates, VehicleReport};
+use crate::telemetry::{statustext, SensorRanges, Telemetry, TelemetryInput, TelemetryRates};
 use crate::wire::FrameWriter;
 use mavlink::dialects::common::{MavMessage, MavSeverity, MavType};
 use mavlink::MAVLinkV2MessageRaw;
-use plumbline_core::msgs::{GroundCommand, PoseFix};
+use plumbline_core::msgs::{CommandResult, GroundCommand, PoseFix};
 use plumbline_core::scan::Beam;
 
 /// MAVLink's component id of an autopilot.
@@ -150,7 +150,7 @@ impl Link {
     }
 
     /// Appends the telemetry due at `now` (and a STATUSTEXT for each mode change or failsafe).
-    pub fn telemetry(&mut self, report: &VehicleReport<'_>, now: LinkTime, out: &mut Vec<u8>) {
+    pub fn telemetry(&mut self, report: &TelemetryInput<'_>, now: LinkTime, out: &mut Vec<u8>) {
         let Self {
             writer,
             signer,
@@ -205,7 +205,7 @@ impl Link {
             .write(message, self.signer.as_mut(), now.unix_s, out);
     }
 
-    /// COMMAND_ACK for a command the autopilot has decided on.
+    /// COMMAND_ACK for a command the autopilot has decided on (core's `Outputs::ground_ack`).
     pub fn acknowledge(
         &mut self,
         to: AckTo,
@@ -213,7 +213,11 @@ impl Link {
         now: LinkTime,
         out: &mut Vec<u8>,
     ) {
-        self.send(&MavMessage::COMMAND_ACK(ack(&to, result)), now, out);
+        self.send(
+            &MavMessage::COMMAND_ACK(ack(&to, mav_result(result))),
+            now,
+            out,
+        );
     }
 
     /// Feeds received bytes (any split, any garbage). Pushes an event for each accepted
@@ -280,7 +284,9 @@ impl Link {
                             command,
                             ack: Some(to),
                         }),
-                        Err(result) => self.acknowledge(to, result, now, replies),
+                        Err(result) => {
+                            self.send(&MavMessage::COMMAND_ACK(ack(&to, result)), now, replies)
+                        }
                     }
                 }
             }

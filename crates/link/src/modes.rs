@@ -104,6 +104,7 @@ pub fn failsafe_text(reason: FailsafeReason) -> &'static str {
         FailsafeReason::BatteryCritical => "battery critical",
         FailsafeReason::KillSwitch => "kill switch",
         FailsafeReason::CompanionLost => "companion lost",
+        FailsafeReason::LinkLost => "ground link lost",
     }
 }
 

@@ -102,17 +102,21 @@ fn judge(bytes: &[u8], counters: &mut DropCounters) -> Candidate {
         return Candidate::Incomplete;
     }
     let message_id = message_id(bytes, v2);
-    let expected = u16::from_le_bytes([bytes[crc_end], bytes[crc_end + 1]]);
-    if calculate_crc(&bytes[1..crc_end], MavMessage::extra_crc(message_id)) == expected {
-        return Candidate::Frame(len);
-    }
-    // Without the message's CRC_EXTRA the checksum cannot match: say which case it was.
-    if MavMessage::default_message_from_id(message_id).is_none() {
+    // The dialect answers 0 for the CRC_EXTRA of an id it does not define; a few real
+    // messages have 0 too, so only then ask whether the id exists. An unknown id cannot be
+    // checked at all and is never passed on, whatever its checksum.
+    let extra_crc = MavMessage::extra_crc(message_id);
+    if extra_crc == 0 && MavMessage::default_message_from_id(message_id).is_none() {
         counters.unknown_id += 1;
+        return Candidate::Reject;
+    }
+    let expected = u16::from_le_bytes([bytes[crc_end], bytes[crc_end + 1]]);
+    if calculate_crc(&bytes[1..crc_end], extra_crc) == expected {
+        Candidate::Frame(len)
     } else {
         counters.bad_crc += 1;
+        Candidate::Reject
     }
-    Candidate::Reject
 }
 
 fn message_id(bytes: &[u8], v2: bool) -> u32 {

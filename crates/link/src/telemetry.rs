@@ -37,7 +37,7 @@ const MAVLINK_VERSION: u8 = 3;
 
 /// Everything the telemetry is built from, as the vehicle has it after one step.
 #[derive(Clone, Copy, Debug)]
-pub struct VehicleReport<'a> {
+pub struct TelemetryInput<'a> {
     /// What the autopilot returned this step (mode, failsafe, estimate).
     pub outputs: &'a Outputs,
     /// Body rates (FLU, rad/s), the gyro's reading.
@@ -182,7 +182,7 @@ impl Telemetry {
     /// Builds every message due at `t` and hands each to `send`, status texts first.
     pub(crate) fn step(
         &mut self,
-        report: &VehicleReport<'_>,
+        report: &TelemetryInput<'_>,
         t: f64,
         mut send: impl FnMut(&MavMessage),
     ) {
@@ -267,7 +267,7 @@ fn heartbeat(out: &Outputs) -> MavMessage {
     })
 }
 
-fn sys_status(report: &VehicleReport<'_>) -> MavMessage {
+fn sys_status(report: &TelemetryInput<'_>) -> MavMessage {
     let out = report.outputs;
     let sensors = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_GYRO
         | MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_ACCEL
@@ -314,7 +314,7 @@ fn sys_status(report: &VehicleReport<'_>) -> MavMessage {
     })
 }
 
-fn battery_status(report: &VehicleReport<'_>) -> MavMessage {
+fn battery_status(report: &TelemetryInput<'_>) -> MavMessage {
     let mut voltages = [u16::MAX; 10];
     // Plumbline measures the pack, not cells: the first entry is the pack voltage, which
     // MAVLink allows when cell voltages are unknown.
@@ -349,7 +349,7 @@ fn battery_status(report: &VehicleReport<'_>) -> MavMessage {
     })
 }
 
-fn attitude(report: &VehicleReport<'_>, t_s: f64) -> MavMessage {
+fn attitude(report: &TelemetryInput<'_>, t_s: f64) -> MavMessage {
     let e = &report.outputs.estimate;
     let [roll, pitch, yaw] = flip_euler(e.roll_rad, e.pitch_rad, e.yaw_rad);
     let [p, q, r] = flip_yz(report.body_rates_rad_s);
@@ -364,7 +364,7 @@ fn attitude(report: &VehicleReport<'_>, t_s: f64) -> MavMessage {
     })
 }
 
-fn local_position(report: &VehicleReport<'_>, t_s: f64) -> MavMessage {
+fn local_position(report: &TelemetryInput<'_>, t_s: f64) -> MavMessage {
     let e = &report.outputs.estimate;
     let [x, y, z] = flip_yz(e.position_m);
     let [vx, vy, vz] = flip_yz(e.velocity_m_s);
