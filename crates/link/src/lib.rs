@@ -15,6 +15,7 @@
 
 mod commands;
 mod counters;
+mod crc;
 mod link;
 pub mod modes;
 pub mod ned;
