@@ -2,10 +2,9 @@
 //! event answerable (parameter replies, command acks) without a panic either.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
+use plumbline_core::flight::params::ParamError;
 use plumbline_core::msgs::CommandResult;
-use plumbline_link::{
-    InboundEvent, Link, LinkConfig, LinkTime, ParamRefusal, ParameterStore, SigningKey,
-};
+use plumbline_link::{InboundEvent, Link, LinkConfig, LinkTime, ParameterStore, SigningKey};
 
 struct OneGain(f32);
 
@@ -19,12 +18,12 @@ impl ParameterStore for OneGain {
     fn value(&self, index: usize) -> Option<f32> {
         (index == 0).then_some(self.0)
     }
-    fn set(&mut self, name: &str, value: f32) -> Result<f32, ParamRefusal> {
-        if name != "POS_XY_P" {
-            return Err(ParamRefusal::Unknown);
+    fn set(&mut self, index: usize, value: f32) -> Result<f32, ParamError> {
+        if index != 0 {
+            return Err(ParamError::Unknown);
         }
         if !(0.0..=5.0).contains(&value) {
-            return Err(ParamRefusal::OutOfRange { min: 0.0, max: 5.0 });
+            return Err(ParamError::OutOfRange { min: 0.0, max: 5.0 });
         }
         self.0 = value;
         Ok(value)
