@@ -45,6 +45,11 @@ impl<const N: usize> Onboard<N> {
         &self.autopilot
     }
 
+    /// The autopilot, for setting its parameters between steps.
+    pub fn autopilot_mut(&mut self) -> &mut Autopilot {
+        &mut self.autopilot
+    }
+
     /// Sets a tuning parameter of the autopilot (see [`Autopilot::set_param`]).
     pub fn set_param(&mut self, index: usize, value: f32) -> Result<f32, ParamError> {
         self.autopilot.set_param(index, value)
