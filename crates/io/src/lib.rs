@@ -4,6 +4,7 @@
 #![forbid(unsafe_code)]
 
 pub mod carmen;
+pub mod endpoint;
 pub mod eval;
 pub mod input;
 pub mod output;
