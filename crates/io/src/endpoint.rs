@@ -190,7 +190,7 @@ mod tests {
             ("udpout:127.0.0.1", "no port"),
             ("udpout:127.0.0.1:0", "port is not a number"),
             ("udpout::14550", "no host"),
-            ("serial:/dev/ttyS0", "baud rate is not a number"),
+            ("serial:/dev/ttyS0", "no baud rate"),
             ("serial:/dev/ttyS0:12", "baud rate is not a number"),
             ("serial::57600", "no device"),
         ] {
