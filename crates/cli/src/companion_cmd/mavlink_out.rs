@@ -1,0 +1,164 @@
+//! The companion's messages as MAVLink 2 frames on an endpoint: HEARTBEAT, ODOMETRY and
+//! OBSTACLE_DISTANCE, in the frames the autopilots accept (pose in LOCAL_FRD, body in
+//! BODY_FRD, estimator VISION: ArduPilot ignores other frame pairs, PX4 rejects LIDAR).
+//!
+//! Plumbline's map frame is x forward at start, y left (ENU-like) and its body FLU; the wire
+//! uses the half turn about x (y and z negated, headings clockwise), so "north" is the heading
+//! the vehicle had when the SLAM started and the autopilot anchors that frame to its own.
+
+use super::pipeline::AutopilotLink;
+use crate::report::CliError;
+use mavlink::dialects::common::{
+    MavAutopilot, MavDistanceSensor, MavEstimatorType, MavFrame, MavMessage, MavModeFlag,
+    MavState, MavType, HEARTBEAT_DATA, OBSTACLE_DISTANCE_DATA, ODOMETRY_DATA,
+};
+use mavlink::MavHeader;
+use plumbline_core::msgs::PoseFix;
+use plumbline_core::scan::sectors::{ObstacleSectors, SECTOR_COUNT, SECTOR_WIDTH_RAD};
+use plumbline_io::endpoint::{Sent, Transport};
+
+/// MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY: the component a pose source speaks as.
+const COMPONENT_ID: u8 = 197;
+/// Variance sent for what a 2-D lidar does not measure: height, roll and pitch (m², rad²).
+/// The autopilots take those from their own sensors; this says the fix has nothing to add.
+const UNMEASURED_VARIANCE: f32 = 100.0;
+/// OBSTACLE_DISTANCE's "no obstacle in range" is max_distance + 1; "unknown" is u16::MAX.
+const UNKNOWN_CM: u16 = u16::MAX;
+/// Nearest distance the sectors claim (cm): below it the autopilot ignores a reading.
+const MIN_DISTANCE_CM: u16 = 2;
+
+/// Frames out of one endpoint, numbered in sequence.
+pub struct MavlinkOut {
+    transport: Transport,
+    system_id: u8,
+    sequence: u8,
+    frame: Vec<u8>,
+}
+
+impl MavlinkOut {
+    pub fn new(transport: Transport, system_id: u8) -> Self {
+        Self {
+            transport,
+            system_id,
+            sequence: 0,
+            frame: Vec::with_capacity(300),
+        }
+    }
+
+    fn send(&mut self, message: &MavMessage) -> Result<Sent, CliError> {
+        let header = MavHeader {
+            system_id: u32::from(self.system_id),
+            component_id: COMPONENT_ID,
+            sequence: self.sequence,
+        };
+        self.sequence = self.sequence.wrapping_add(1);
+        self.frame.clear();
+        mavlink::write_v2_msg(&mut self.frame, header, message)
+            .map_err(|e| CliError(format!("MAVLink: cannot encode a frame: {e}")))?;
+        self.transport
+            .send(&self.frame)
+            .map_err(|e| CliError(format!("MAVLink endpoint failed (autopilot gone?): {e}")))
+    }
+}
+
+fn time_usec(t_s: f64) -> u64 {
+    (t_s.max(0.0) * 1e6) as u64
+}
+
+/// ODOMETRY for a pose fix, in the wire's frames.
+pub fn odometry(fix: &PoseFix) -> ODOMETRY_DATA {
+    let yaw_frd = -fix.yaw_rad;
+    let (s, c) = (0.5 * yaw_frd).sin_cos();
+    // (x, y, yaw) of the fix at rows 0, 1, 5 of the 6x6 (x y z roll pitch yaw); y and yaw
+    // change sign on the wire, so their products with x change sign and with each other not.
+    let sign = [1.0, -1.0, -1.0];
+    let at = [0usize, 1, 5];
+    let mut full = [[0.0f32; 6]; 6];
+    for i in 0..3 {
+        for j in 0..3 {
+            full[at[i]][at[j]] = fix.covariance[i][j] * sign[i] * sign[j];
+        }
+    }
+    for k in [2, 3, 4] {
+        full[k][k] = UNMEASURED_VARIANCE;
+    }
+    let mut pose_covariance = [0.0f32; 21];
+    let mut k = 0;
+    for (i, row) in full.iter().enumerate() {
+        for v in &row[i..] {
+            pose_covariance[k] = *v;
+            k += 1;
+        }
+    }
+    let mut velocity_covariance = [0.0f32; 21];
+    velocity_covariance[0] = f32::NAN;
+    ODOMETRY_DATA {
+        time_usec: time_usec(fix.t_s),
+        x: fix.position_m[0],
+        y: -fix.position_m[1],
+        z: 0.0,
+        q: [c, 0.0, 0.0, s],
+        vx: f32::NAN,
+        vy: f32::NAN,
+        vz: f32::NAN,
+        rollspeed: f32::NAN,
+        pitchspeed: f32::NAN,
+        yawspeed: f32::NAN,
+        pose_covariance,
+        velocity_covariance,
+        frame_id: MavFrame::MAV_FRAME_LOCAL_FRD,
+        child_frame_id: MavFrame::MAV_FRAME_BODY_FRD,
+        reset_counter: fix.reset_counter,
+        estimator_type: MavEstimatorType::MAV_ESTIMATOR_TYPE_VISION,
+        quality: fix.quality_pct.map_or(-1, |q| q.min(100) as i8),
+    }
+}
+
+/// OBSTACLE_DISTANCE for a revolution: sector `j` of the message is `j` sectors clockwise
+/// from ahead (body FRD), which is Plumbline's sector `-j`.
+pub fn obstacles(sectors: &ObstacleSectors, max_range_m: f32) -> OBSTACLE_DISTANCE_DATA {
+    let max_cm = (max_range_m * 100.0).clamp(f32::from(MIN_DISTANCE_CM) + 1.0, 65_000.0) as u16;
+    let distances = core::array::from_fn(|j| {
+        match sectors.nearest_m[(SECTOR_COUNT - j) % SECTOR_COUNT] {
+            None => UNKNOWN_CM,
+            Some(r) => ((r * 100.0).round() as u16).clamp(MIN_DISTANCE_CM, max_cm),
+        }
+    });
+    let width_deg = SECTOR_WIDTH_RAD.to_degrees();
+    OBSTACLE_DISTANCE_DATA {
+        time_usec: time_usec(sectors.t_s),
+        distances,
+        min_distance: MIN_DISTANCE_CM,
+        max_distance: max_cm,
+        sensor_type: MavDistanceSensor::MAV_DISTANCE_SENSOR_LASER,
+        increment: width_deg.round() as u8,
+        increment_f: width_deg,
+        angle_offset: 0.0,
+        frame: MavFrame::MAV_FRAME_BODY_FRD,
+    }
+}
+
+impl AutopilotLink for MavlinkOut {
+    fn heartbeat(&mut self, _t_s: f64) -> Result<Sent, CliError> {
+        self.send(&MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            custom_mode: 0,
+            mavtype: MavType::MAV_TYPE_ONBOARD_CONTROLLER,
+            autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+            base_mode: MavModeFlag::empty(),
+            system_status: MavState::MAV_STATE_ACTIVE,
+            mavlink_version: 3,
+        }))
+    }
+
+    fn odometry(&mut self, fix: &PoseFix) -> Result<Sent, CliError> {
+        self.send(&MavMessage::ODOMETRY(odometry(fix)))
+    }
+
+    fn obstacles(
+        &mut self,
+        sectors: &ObstacleSectors,
+        max_range_m: f32,
+    ) -> Result<Sent, CliError> {
+        self.send(&MavMessage::OBSTACLE_DISTANCE(obstacles(sectors, max_range_m)))
+    }
+}
