@@ -7,6 +7,7 @@ pub mod carmen;
 pub mod endpoint;
 pub mod eval;
 pub mod input;
+pub mod link_port;
 pub mod output;
 mod pose_math;
 pub mod relations;

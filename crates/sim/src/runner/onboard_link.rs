@@ -6,10 +6,14 @@
 //! ([`WithCompanion`]): it sees each revolution as the stack does and its messages reach the
 //! autopilot in the same step, as a wired link would deliver them between two steps.
 //!
+//! A ground station ([`GroundStation`]) may be linked too: it sees what the vehicle reports after
+//! each step and its messages reach the autopilot at the next one.
+//!
 //! The runner consumes the flight software, so what the stack did (modes, failsafes, its
 //! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
 //! to. The runner never hands the stack ground truth; the log holds only onboard values.
 
+use crate::runner::ground::{GroundLink, GroundStation, VehicleReport};
 use crate::runner::mission::Mission;
 use crate::runner::{FlightSoftware, SensorFrame, SetupError, STATE_RATE_HZ};
 use crate::sensors::lidar::{LidarProfile, LidarScan};
@@ -20,8 +24,8 @@ use plumbline_core::flight::autopilot::AutopilotConfig;
 use plumbline_core::flight::onboard::Onboard;
 use plumbline_core::matching::OdometryConfig;
 use plumbline_core::msgs::{
-    CompanionMessages, EstimatedState, FailsafeReason, FlightMode, FrameKind, ImuSample, Inputs,
-    MotorCommands, PilotInput,
+    CompanionMessages, EstimatedState, FailsafeReason, FlightMode, FrameKind, GroundMessages,
+    ImuSample, Inputs, MotorCommands, PilotInput,
 };
 use plumbline_core::scan::{Beam, Scan};
 use std::cell::RefCell;
@@ -166,6 +170,7 @@ pub struct OnboardLink<const N: usize> {
     /// Set when the stack first holds: how much later than planned the mission flies.
     mission_shift_s: Option<f64>,
     log: Rc<RefCell<FlightLog>>,
+    ground: Option<GroundLink>,
 }
 
 impl<const N: usize> OnboardLink<N> {
@@ -192,6 +197,7 @@ impl<const N: usize> OnboardLink<N> {
             next_sample_s: 0.0,
             mission_shift_s: None,
             log: log.clone(),
+            ground: None,
         };
         Ok((link, log))
     }
@@ -257,8 +263,25 @@ impl<const N: usize> OnboardLink<N> {
                 m.setpoint(frame.t_s - shift)
             }),
             companion: messages,
+            ground: self
+                .ground
+                .as_mut()
+                .map_or(GroundMessages::default(), |g| g.uplink()),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
+        if let Some(ground) = self.ground.as_mut() {
+            let report = VehicleReport {
+                t_s: frame.t_s,
+                outputs: &out,
+                imu: self.last_imu,
+                battery: frame.battery,
+                sonar: frame.sonar,
+                scan: scan.map(|s| s.beams()),
+                events: &[],
+                events_missed: 0,
+            };
+            ground.exchange(report, self.onboard.autopilot().events());
+        }
         if let (None, Some(m), FlightMode::Hold) =
             (self.mission_shift_s, &self.script.mission, out.mode)
         {
@@ -309,6 +332,24 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
     fn step(&mut self, frame: &SensorFrame<'_>, dt_s: f64) -> MotorCommands {
         self.step_with(frame, dt_s, None)
     }
+
+    fn link_ground(
+        &mut self,
+        station: Box<dyn GroundStation>,
+    ) -> Result<(), Box<dyn GroundStation>> {
+        self.link_ground_station(station);
+        Ok(())
+    }
+}
+
+impl<const N: usize> OnboardLink<N> {
+    /// Links `station` to the stack from the next step on, beside any linked before.
+    pub fn link_ground_station(&mut self, station: Box<dyn GroundStation>) {
+        let events = self.onboard.autopilot().events().total();
+        self.ground
+            .get_or_insert_with(|| GroundLink::new(events))
+            .add(station);
+    }
 }
 
 /// The onboard stack with a companion computer on board.
@@ -324,6 +365,14 @@ impl<const N: usize> FlightSoftware for WithCompanion<'_, N> {
 
     fn step(&mut self, frame: &SensorFrame<'_>, dt_s: f64) -> MotorCommands {
         self.link.step_with(frame, dt_s, Some(&mut *self.companion))
+    }
+
+    fn link_ground(
+        &mut self,
+        station: Box<dyn GroundStation>,
+    ) -> Result<(), Box<dyn GroundStation>> {
+        self.link.link_ground_station(station);
+        Ok(())
     }
 }
 
