@@ -4,7 +4,6 @@
 #![forbid(unsafe_code)]
 
 pub mod carmen;
-pub mod endpoint;
 pub mod eval;
 pub mod input;
 pub mod link_port;

@@ -14,8 +14,8 @@ use mavlink::dialects::common::{
 };
 use mavlink::MavHeader;
 use plumbline_core::msgs::PoseFix;
-use plumbline_core::scan::sectors::{ObstacleSectors, SECTOR_COUNT, SECTOR_WIDTH_RAD};
-use plumbline_io::endpoint::{Sent, Transport};
+use plumbline_core::scan::sectors::{ObstacleSectors, SECTOR_COUNT};
+use plumbline_io::link_port::LinkPort;
 
 /// MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY: the component a pose source speaks as.
 const COMPONENT_ID: u8 = 197;
@@ -27,25 +27,35 @@ const UNKNOWN_CM: u16 = u16::MAX;
 /// Nearest distance the sectors claim (cm): below it the autopilot ignores a reading.
 const MIN_DISTANCE_CM: u16 = 2;
 
+/// Sends failing with an error (not a full buffer) this many times in a row mean the way to
+/// the autopilot is gone (a serial adapter unplugged), and the run ends.
+const FAILED_SENDS_LIMIT: u64 = 50;
+
 /// Frames out of one endpoint, numbered in sequence.
 pub struct MavlinkOut {
-    transport: Transport,
+    port: LinkPort,
     system_id: u8,
     sequence: u8,
     frame: Vec<u8>,
+    failing_since: Option<u64>,
 }
 
 impl MavlinkOut {
-    pub fn new(transport: Transport, system_id: u8) -> Self {
+    pub fn new(port: LinkPort, system_id: u8) -> Self {
         Self {
-            transport,
+            port,
             system_id,
             sequence: 0,
             frame: Vec::with_capacity(300),
+            failing_since: None,
         }
     }
 
-    fn send(&mut self, message: &MavMessage) -> Result<Sent, CliError> {
+    pub fn port(&self) -> &LinkPort {
+        &self.port
+    }
+
+    fn send(&mut self, message: &MavMessage) -> Result<bool, CliError> {
         let header = MavHeader {
             system_id: u32::from(self.system_id),
             component_id: COMPONENT_ID,
@@ -55,9 +65,20 @@ impl MavlinkOut {
         self.frame.clear();
         mavlink::write_v2_msg(&mut self.frame, header, message)
             .map_err(|e| CliError(format!("MAVLink: cannot encode a frame: {e}")))?;
-        self.transport
-            .send(&self.frame)
-            .map_err(|e| CliError(format!("MAVLink endpoint failed (autopilot gone?): {e}")))
+        let sent = self.port.send(&self.frame);
+        let errors = self.port.counters().send_errors;
+        if sent {
+            self.failing_since = None;
+        } else if errors > 0 {
+            let since = *self.failing_since.get_or_insert(errors - 1);
+            if errors - since >= FAILED_SENDS_LIMIT {
+                return Err(CliError(format!(
+                    "MAVLink: the last {FAILED_SENDS_LIMIT} messages could not be sent \
+                     (the autopilot's port gone?)"
+                )));
+            }
+        }
+        Ok(sent)
     }
 }
 
@@ -124,7 +145,7 @@ pub fn obstacles(sectors: &ObstacleSectors, max_range_m: f32) -> OBSTACLE_DISTAN
             Some(r) => ((r * 100.0).round() as u16).clamp(MIN_DISTANCE_CM, max_cm),
         }
     });
-    let width_deg = SECTOR_WIDTH_RAD.to_degrees();
+    let width_deg = 360.0 / SECTOR_COUNT as f32;
     OBSTACLE_DISTANCE_DATA {
         time_usec: time_usec(sectors.t_s),
         distances,
@@ -139,7 +160,7 @@ pub fn obstacles(sectors: &ObstacleSectors, max_range_m: f32) -> OBSTACLE_DISTAN
 }
 
 impl AutopilotLink for MavlinkOut {
-    fn heartbeat(&mut self, _t_s: f64) -> Result<Sent, CliError> {
+    fn heartbeat(&mut self, _t_s: f64) -> Result<bool, CliError> {
         self.send(&MavMessage::HEARTBEAT(HEARTBEAT_DATA {
             custom_mode: 0,
             mavtype: MavType::MAV_TYPE_ONBOARD_CONTROLLER,
@@ -150,7 +171,7 @@ impl AutopilotLink for MavlinkOut {
         }))
     }
 
-    fn odometry(&mut self, fix: &PoseFix) -> Result<Sent, CliError> {
+    fn odometry(&mut self, fix: &PoseFix) -> Result<bool, CliError> {
         self.send(&MavMessage::ODOMETRY(odometry(fix)))
     }
 
@@ -158,7 +179,7 @@ impl AutopilotLink for MavlinkOut {
         &mut self,
         sectors: &ObstacleSectors,
         max_range_m: f32,
-    ) -> Result<Sent, CliError> {
+    ) -> Result<bool, CliError> {
         self.send(&MavMessage::OBSTACLE_DISTANCE(obstacles(sectors, max_range_m)))
     }
 }

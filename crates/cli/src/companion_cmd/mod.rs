@@ -14,7 +14,7 @@ use crate::numeric::{within, Range};
 use crate::report::{print_summary, CliError, CliResult};
 use clap::{ArgGroup, Args};
 use pipeline::{AutopilotLink, Companion};
-use plumbline_io::endpoint::Endpoint;
+use plumbline_io::link_port::{Endpoint, LinkPort};
 use plumbline_io::serial::{Device, RecordOptions};
 use plumbline_slam::{local_map_cells, Slam, SlamConfig};
 use serde_json::{json, Value};
@@ -45,7 +45,7 @@ pub struct CompanionArgs {
     replay_log: Option<PathBuf>,
     /// Where MAVLink goes: udpout:HOST:PORT or serial:DEVICE:BAUD (the autopilot's telemetry
     /// port).
-    #[arg(long, value_name = "ENDPOINT")]
+    #[arg(long, value_name = "ENDPOINT", value_parser = Endpoint::parse)]
     mavlink: Endpoint,
     /// MAVLink system id: the autopilot's own (the companion is a component of the vehicle).
     /// Valid range: [1, 255].
@@ -107,12 +107,14 @@ pub fn run(a: CompanionArgs) -> CliResult {
     let source = source(&a)?;
     let live = matches!(source, Source::Port(_));
     let sysid = u8::try_from(a.sysid).map_err(|e| CliError(format!("--sysid: {e}")))?;
-    let transport = a.mavlink.open().map_err(CliError)?;
-    let link = mavlink_out::MavlinkOut::new(transport, sysid);
-    let summary = run_with(&source, live, a.realtime && !live, link)?;
-    let mut summary = summary;
+    let port = LinkPort::open(&a.mavlink)
+        .map_err(|e| CliError(format!("--mavlink {:?}: cannot open: {e}", a.mavlink)))?;
+    let mut link = mavlink_out::MavlinkOut::new(port, sysid);
+    let mut summary = run_with(&source, live, a.realtime && !live, &mut link)?;
+    let c = link.port().counters();
     if let Value::Object(map) = &mut summary {
-        map.insert("mavlink".into(), a.mavlink.to_string().into());
+        map.insert("mavlink_bytes_sent".into(), c.sent_bytes.into());
+        map.insert("mavlink_send_errors".into(), c.send_errors.into());
     }
     print_summary(&summary, a.json);
     Ok(())

@@ -8,7 +8,6 @@ use plumbline_core::msgs::PoseFix;
 use plumbline_core::scan::sectors::ObstacleSectors;
 use plumbline_core::scan::Scan;
 use plumbline_io::carmen::LaserRecord;
-use plumbline_io::endpoint::Sent;
 use plumbline_slam::Slam;
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -19,15 +18,27 @@ const HEARTBEAT_PERIOD_S: f64 = 1.0;
 /// What the companion tells the autopilot; the MAVLink encoding lives behind it.
 pub trait AutopilotLink {
     /// HEARTBEAT: a companion computer is here.
-    fn heartbeat(&mut self, t_s: f64) -> Result<Sent, CliError>;
+    fn heartbeat(&mut self, t_s: f64) -> Result<bool, CliError>;
     /// ODOMETRY from a pose fix.
-    fn odometry(&mut self, fix: &PoseFix) -> Result<Sent, CliError>;
+    fn odometry(&mut self, fix: &PoseFix) -> Result<bool, CliError>;
     /// OBSTACLE_DISTANCE from a revolution's sectors; `max_range_m` is the lidar's reach.
-    fn obstacles(&mut self, sectors: &ObstacleSectors, max_range_m: f32)
-        -> Result<Sent, CliError>;
+    fn obstacles(&mut self, sectors: &ObstacleSectors, max_range_m: f32) -> Result<bool, CliError>;
 }
 
-/// Messages handed to the link and how many of them it could not send at once.
+/// A link lent to a run, so the caller reads its counters afterwards.
+impl<T: AutopilotLink> AutopilotLink for &mut T {
+    fn heartbeat(&mut self, t_s: f64) -> Result<bool, CliError> {
+        (**self).heartbeat(t_s)
+    }
+    fn odometry(&mut self, fix: &PoseFix) -> Result<bool, CliError> {
+        (**self).odometry(fix)
+    }
+    fn obstacles(&mut self, sectors: &ObstacleSectors, max_range_m: f32) -> Result<bool, CliError> {
+        (**self).obstacles(sectors, max_range_m)
+    }
+}
+
+/// Messages handed to the link: sent, or dropped because they could not go out at once.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counted {
     pub sent: usize,
@@ -35,10 +46,11 @@ pub struct Counted {
 }
 
 impl Counted {
-    fn add(&mut self, s: Sent) {
-        match s {
-            Sent::Sent => self.sent += 1,
-            Sent::Dropped => self.dropped += 1,
+    fn add(&mut self, sent: bool) {
+        if sent {
+            self.sent += 1;
+        } else {
+            self.dropped += 1;
         }
     }
 }
