@@ -183,3 +183,50 @@ impl AutopilotLink for MavlinkOut {
         self.send(&MavMessage::OBSTACLE_DISTANCE(obstacles(sectors, max_range_m)))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use core::f32::consts::FRAC_PI_2;
+
+    #[test]
+    fn a_pose_to_the_left_facing_left_is_west_facing_west_on_the_wire() {
+        let fix = PoseFix {
+            t_s: 2.5,
+            position_m: [1.0, 2.0],
+            yaw_rad: FRAC_PI_2,
+            covariance: [[0.01, 0.002, 0.003], [0.002, 0.04, 0.0], [0.003, 0.0, 0.001]],
+            quality_pct: Some(87),
+            reset_counter: 4,
+        };
+        let o = odometry(&fix);
+        assert_eq!((o.time_usec, o.x, o.y, o.z), (2_500_000, 1.0, -2.0, 0.0));
+        // Heading -90 degrees about z down: w = cos(-45), z = sin(-45).
+        let h = core::f32::consts::FRAC_1_SQRT_2;
+        assert!((o.q[0] - h).abs() < 1e-6 && (o.q[3] + h).abs() < 1e-6, "{:?}", o.q);
+        let c = o.pose_covariance;
+        // Rows x (0..6), y (6..11), z (11..15), roll (15..18), pitch (18..20), yaw (20).
+        assert_eq!((c[0], c[1], c[5]), (0.01, -0.002, -0.003));
+        assert_eq!((c[6], c[10], c[20]), (0.04, 0.0, 0.001));
+        assert_eq!((c[11], c[15], c[18]), (100.0, 100.0, 100.0));
+        assert_eq!((o.quality, o.reset_counter), (87, 4));
+        let lost = odometry(&PoseFix {
+            quality_pct: None,
+            ..fix
+        });
+        assert_eq!(lost.quality, -1);
+    }
+
+    #[test]
+    fn obstacle_sectors_turn_clockwise_and_unknown_stays_unknown() {
+        let mut nearest_m = [None; SECTOR_COUNT];
+        nearest_m[0] = Some(1.234);
+        nearest_m[18] = Some(0.5); // on the left: 270 degrees clockwise
+        nearest_m[54] = Some(30.0); // on the right, beyond the lidar's reach
+        let o = obstacles(&ObstacleSectors { t_s: 1.0, nearest_m }, 6.0);
+        assert_eq!((o.distances[0], o.distances[54], o.distances[18]), (123, 50, 600));
+        assert_eq!((o.min_distance, o.max_distance), (MIN_DISTANCE_CM, 600));
+        assert_eq!(o.distances.iter().filter(|d| **d == UNKNOWN_CM).count(), 69);
+        assert_eq!((o.increment, o.increment_f), (5, 5.0));
+    }
+}
