@@ -89,7 +89,10 @@ fn the_capture_arrives_as_one_odometry_and_one_obstacle_message_per_revolution()
     let s = &r.summary;
     let scans = s["scans"].as_u64().unwrap() as usize;
     assert_eq!(scans, 161, "{s}");
-    assert_eq!((r.odometry.len(), r.obstacles.len(), r.other), (scans, scans, 0));
+    assert_eq!(
+        (r.odometry.len(), r.obstacles.len(), r.other),
+        (scans, scans, 0)
+    );
     assert_eq!(s["odometry_sent"], scans);
     // The hand covers the lidar for a while: those revolutions are empty and sent as lost.
     let lost = r.odometry.iter().filter(|o| o.quality == -1).count();
@@ -98,14 +101,21 @@ fn the_capture_arrives_as_one_odometry_and_one_obstacle_message_per_revolution()
     for o in &r.odometry {
         assert_eq!(o.frame_id, MavFrame::MAV_FRAME_LOCAL_FRD);
         assert_eq!(o.child_frame_id, MavFrame::MAV_FRAME_BODY_FRD);
-        assert_eq!(o.estimator_type, MavEstimatorType::MAV_ESTIMATOR_TYPE_VISION);
+        assert_eq!(
+            o.estimator_type,
+            MavEstimatorType::MAV_ESTIMATOR_TYPE_VISION
+        );
         assert!((-1..=100).contains(&o.quality));
         let norm: f32 = o.q.iter().map(|v| v * v).sum();
         assert!((norm - 1.0).abs() < 1e-5 && o.q[1] == 0.0 && o.q[2] == 0.0);
-        // x, y and yaw variances positive; what a 2-D lidar cannot see marked as unmeasured.
+        // x, y and yaw variances positive; what a 2-D lidar cannot see (height, roll, pitch)
+        // unknown.
         let c = &o.pose_covariance;
         assert!(c[0] > 0.0 && c[6] > 0.0 && c[20] > 0.0, "{c:?}");
-        assert!(c[11] >= 100.0 && c[15] >= 100.0 && c[18] >= 100.0, "{c:?}");
+        assert!(
+            o.z.is_nan() && c[11].is_nan() && c[15].is_nan() && c[18].is_nan(),
+            "{c:?}"
+        );
         assert!(o.velocity_covariance[0].is_nan() && o.vx.is_nan());
         if o.quality == -1 {
             assert!(c[0] >= 100.0, "a lost pose claims {} m^2", c[0]);
@@ -118,17 +128,29 @@ fn the_capture_arrives_as_one_odometry_and_one_obstacle_message_per_revolution()
     assert!(s["relocalizations"].as_u64().unwrap() >= u64::from(*resets.last().unwrap()));
     // Heartbeats once a second of capture time, as a companion computer.
     let span_s = (r.odometry[scans - 1].time_usec - r.odometry[0].time_usec) as f64 * 1e-6;
-    assert!(r.heartbeats.iter().all(|t| *t == MavType::MAV_TYPE_ONBOARD_CONTROLLER));
+    assert!(r
+        .heartbeats
+        .iter()
+        .all(|t| *t == MavType::MAV_TYPE_ONBOARD_CONTROLLER));
     let beats = r.heartbeats.len() as f64;
-    assert!((beats - span_s).abs() <= 1.5, "{beats} heartbeats in {span_s} s");
+    assert!(
+        (beats - span_s).abs() <= 1.5,
+        "{beats} heartbeats in {span_s} s"
+    );
     for (o, odo) in r.obstacles.iter().zip(&r.odometry) {
         assert_eq!(o.frame, MavFrame::MAV_FRAME_BODY_FRD);
         assert_eq!(o.sensor_type, MavDistanceSensor::MAV_DISTANCE_SENSOR_LASER);
         assert_eq!((o.increment, o.increment_f, o.angle_offset), (5, 5.0, 0.0));
-        let known: Vec<u16> = o.distances.iter().copied().filter(|d| *d != u16::MAX).collect();
+        let known: Vec<u16> = o
+            .distances
+            .iter()
+            .copied()
+            .filter(|d| *d != u16::MAX)
+            .collect();
+        // A sector's nearest return, or max_distance + 1 for "nothing in range".
         assert!(known
             .iter()
-            .all(|d| (o.min_distance..=o.max_distance).contains(d)));
+            .all(|d| (o.min_distance..=o.max_distance + 1).contains(d)));
         // An empty revolution knows no sector; a matched one knows some.
         if odo.quality > 0 {
             assert!(!known.is_empty());
@@ -142,7 +164,10 @@ fn a_carmen_log_replayed_gives_a_trajectory_that_scores_against_its_relations() 
     let relations = Path::new(REPO).join("data/intel-excerpt.relations");
     let r = companion(&["--replay-log", p(&log)]);
     assert_eq!(r.odometry.len(), 597);
-    assert!(r.odometry.iter().all(|o| o.quality > 0 || o.time_usec == r.odometry[0].time_usec));
+    assert!(r
+        .odometry
+        .iter()
+        .all(|o| o.quality > 0 || o.time_usec == r.odometry[0].time_usec));
     // Back from the wire's frames (y and heading negated) into a trajectory file.
     let text: String = r
         .odometry
@@ -180,7 +205,10 @@ fn bad_input_is_a_clear_error() {
             "no valid xv11 frame",
         ),
         (vec!["--replay", p(&capture())], "--replay needs --lidar"),
-        (vec!["--replay-log", p(&empty_log)], "no FLASER or ROBOTLASER1"),
+        (
+            vec!["--replay-log", p(&empty_log)],
+            "no FLASER or ROBOTLASER1",
+        ),
         (
             vec!["--lidar", "xv11", "--port", "/dev/plumbline-no-such-port"],
             "/dev/plumbline-no-such-port: cannot open",
@@ -197,7 +225,11 @@ fn bad_input_is_a_clear_error() {
         assert!(stderr(&out).contains(says), "{args:?}: {}", stderr(&out));
     }
     let out = run(&["companion", "--mavlink", "udp:1.2.3.4", "--replay-log", "x"]);
-    assert!(stderr(&out).contains("udpout:HOST:PORT"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("udpout:HOST:PORT"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 #[test]

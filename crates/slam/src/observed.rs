@@ -64,9 +64,8 @@ impl Observed {
 fn rotate_covariance(m: &[[f32; 3]; 3], angle_rad: f32) -> [[f32; 3]; 3] {
     let (s, c) = angle_rad.sin_cos();
     let b = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
-    let bm: [[f32; 3]; 3] = core::array::from_fn(|i| {
-        core::array::from_fn(|j| (0..3).map(|k| b[i][k] * m[k][j]).sum())
-    });
+    let bm: [[f32; 3]; 3] =
+        core::array::from_fn(|i| core::array::from_fn(|j| (0..3).map(|k| b[i][k] * m[k][j]).sum()));
     // One triangle, mirrored, so the result is exactly symmetric.
     let entry = |i: usize, j: usize| -> f32 {
         let (i, j) = (i.min(j), i.max(j));

@@ -169,6 +169,9 @@ mod tests {
         assert!(var(along.perp()) < 0.01, "{c:?}");
         assert_eq!(c[0][1], c[1][0]);
         let lost = covariance(&at(true, None));
-        assert_eq!((lost[0][0], lost[2][2]), (LOST_VARIANCE_M2, LOST_VARIANCE_RAD2));
+        assert_eq!(
+            (lost[0][0], lost[2][2]),
+            (LOST_VARIANCE_M2, LOST_VARIANCE_RAD2)
+        );
     }
 }

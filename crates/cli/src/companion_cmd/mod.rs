@@ -109,7 +109,12 @@ pub fn run(a: CompanionArgs) -> CliResult {
     let sysid = u8::try_from(a.sysid).map_err(|e| CliError(format!("--sysid: {e}")))?;
     let port = LinkPort::open(&a.mavlink)
         .map_err(|e| CliError(format!("--mavlink {:?}: cannot open: {e}", a.mavlink)))?;
-    let mut link = mavlink_out::MavlinkOut::new(port, sysid);
+    // A CARMEN log's beams are valid as the log says; a device's from its datasheet on.
+    let min_range_m = a
+        .lidar
+        .filter(|_| a.replay_log.is_none())
+        .map_or(0.0, Device::min_range_m);
+    let mut link = mavlink_out::MavlinkOut::new(port, sysid, min_range_m);
     let mut summary = run_with(&source, live, a.realtime && !live, &mut link)?;
     let c = link.port().counters();
     if let Value::Object(map) = &mut summary {

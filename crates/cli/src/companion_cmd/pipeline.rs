@@ -1,12 +1,11 @@
-//! One revolution through the companion: SLAM, the pose fix, the obstacle sectors, and what
+//! One revolution through the companion: SLAM, the pose fix, the obstacles around, and what
 //! goes to the autopilot, with the counts and times the summary reports.
 
 use super::fix::{FixMaker, Resets};
 use crate::odometry_cmd::{percentile, MAX_BEAMS};
 use crate::report::CliError;
 use plumbline_core::msgs::PoseFix;
-use plumbline_core::scan::sectors::ObstacleSectors;
-use plumbline_core::scan::Scan;
+use plumbline_core::scan::{Beam, Scan};
 use plumbline_io::carmen::LaserRecord;
 use plumbline_slam::Slam;
 use serde_json::{json, Value};
@@ -21,8 +20,9 @@ pub trait AutopilotLink {
     fn heartbeat(&mut self, t_s: f64) -> Result<bool, CliError>;
     /// ODOMETRY from a pose fix.
     fn odometry(&mut self, fix: &PoseFix) -> Result<bool, CliError>;
-    /// OBSTACLE_DISTANCE from a revolution's sectors; `max_range_m` is the lidar's reach.
-    fn obstacles(&mut self, sectors: &ObstacleSectors, max_range_m: f32) -> Result<bool, CliError>;
+    /// OBSTACLE_DISTANCE from a revolution's beams (body frame); `max_range_m` is the lidar's
+    /// reach.
+    fn obstacles(&mut self, t_s: f64, beams: &[Beam], max_range_m: f32) -> Result<bool, CliError>;
 }
 
 /// A link lent to a run, so the caller reads its counters afterwards.
@@ -33,8 +33,8 @@ impl<T: AutopilotLink> AutopilotLink for &mut T {
     fn odometry(&mut self, fix: &PoseFix) -> Result<bool, CliError> {
         (**self).odometry(fix)
     }
-    fn obstacles(&mut self, sectors: &ObstacleSectors, max_range_m: f32) -> Result<bool, CliError> {
-        (**self).obstacles(sectors, max_range_m)
+    fn obstacles(&mut self, t_s: f64, beams: &[Beam], max_range_m: f32) -> Result<bool, CliError> {
+        (**self).obstacles(t_s, beams, max_range_m)
     }
 }
 
@@ -73,7 +73,7 @@ pub struct Companion<'m, L> {
     pub odometry: Counted,
     pub obstacles: Counted,
     pub heartbeats: Counted,
-    /// Every revolution's time through the pipeline (µs): SLAM, fix, sectors, sending.
+    /// Every revolution's time through the pipeline (µs): SLAM, fix, encoding, sending.
     times_us: Vec<f64>,
     /// The last fix sent, for tests and the summary.
     pub last_fix: Option<PoseFix>,
@@ -125,10 +125,11 @@ impl<'m, L: AutopilotLink> Companion<'m, L> {
         let start = Instant::now();
         let at = self.slam.add_scan(&self.scan, None);
         let fix = self.fixes.fix(&self.slam, t_s, &at);
-        let sectors = ObstacleSectors::from_scan(&self.scan);
         let sent = self.link.odometry(&fix)?;
         self.odometry.add(sent);
-        let sent = self.link.obstacles(&sectors, rec.max_range_m)?;
+        let sent = self
+            .link
+            .obstacles(t_s, self.scan.beams(), rec.max_range_m)?;
         self.obstacles.add(sent);
         self.times_us.push(start.elapsed().as_secs_f64() * 1e6);
         if at.predicted {

@@ -9,7 +9,6 @@
 //! moves every beam to where the sensor was at mid-revolution.
 
 pub mod level;
-pub mod sectors;
 pub mod sweep;
 
 use crate::geom::Vec2;
