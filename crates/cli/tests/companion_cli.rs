@@ -269,6 +269,38 @@ fn a_lidar_port_that_falls_silent_ends_the_run_with_what_it_sent() {
 }
 
 #[test]
+fn a_lidar_port_that_vanishes_mid_run_keeps_what_was_sent_and_fails() {
+    let dir = scratch("companion-vanish");
+    let Some(socat) = socat_pair(&dir, "a_lidar_port_that_vanishes_mid_run") else {
+        return;
+    };
+    let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let to = format!("udpout:{}", socket.local_addr().unwrap());
+    let child = Command::new(BIN)
+        .args(["companion", "--lidar", "xv11", "--port", p(&socat.b)])
+        .args(["--idle-timeout", "5", "--mavlink", &to, "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    let bytes = std::fs::read(capture()).unwrap();
+    std::fs::write(&socat.a, &bytes[..bytes.len() / 2]).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    drop(socat); // the adapter is unplugged
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        !out.status.success(),
+        "a vanished port ended the run as if asked"
+    );
+    assert!(stderr(&out).contains("device gone"), "{}", stderr(&out));
+    let s = last_json(&out);
+    assert!(s["failure"].is_string(), "{s}");
+    assert!(s["scans"].as_u64().unwrap() > 50, "{s}");
+    assert_eq!(s["odometry_sent"], s["scans"]);
+}
+
+#[test]
 fn pymavlink_as_the_autopilot_accepts_every_message() {
     let python = Path::new(REPO).join(".venv/bin/python");
     assert!(

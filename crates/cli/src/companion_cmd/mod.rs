@@ -122,7 +122,12 @@ pub fn run(a: CompanionArgs) -> CliResult {
         map.insert("mavlink_send_errors".into(), c.send_errors.into());
     }
     print_summary(&summary, a.json);
-    Ok(())
+    // A lidar port that failed mid-run: the run up to then was sent and summarised, and the
+    // exit says it did not end as asked.
+    match summary["failure"].as_str() {
+        Some(f) => Err(CliError(format!("{f}; the run up to then was sent"))),
+        None => Ok(()),
+    }
 }
 
 /// The whole run over any link: a live port runs the SLAM backend on its own thread, as it
@@ -151,9 +156,6 @@ fn run_with<L: AutopilotLink>(
              each was sent as lost (quality -1)",
             companion.empty_scans, companion.scans
         );
-    }
-    if let Some(f) = &end.failure {
-        eprintln!("plumbline: {f}; the run up to then stands");
     }
     let wall_s = wall.elapsed().as_secs_f64();
     let duration = span.map_or(0.0, |(a, b)| b - a);
