@@ -13,7 +13,7 @@ use std::net::UdpSocket;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
-use support::{capture, excerpt, last_json, p, run, scratch, socat_pair, stderr, BIN, REPO};
+use support::{capture, excerpt, last_json, p, run, scratch, socat_pair, stderr, Socat, BIN, REPO};
 
 /// What one run sent, decoded, with its summary.
 struct Received {
@@ -232,35 +232,39 @@ fn bad_input_is_a_clear_error() {
     );
 }
 
-#[test]
-fn a_lidar_port_that_falls_silent_ends_the_run_with_what_it_sent() {
-    let dir = scratch("companion-port");
-    let Some(socat) = socat_pair(&dir, "a_lidar_port_that_falls_silent_ends_the_run") else {
-        return;
-    };
+/// Runs the companion on the far end of a virtual serial pair; `feed` gets the pair half a
+/// second after the start, writes the lidar's bytes into its near end and hands it back to stay
+/// plugged in until the run ends, or drops it (unplugs it). `None`, with the reason printed,
+/// where socat cannot run.
+fn live(
+    test: &str,
+    idle_timeout_s: &str,
+    feed: impl FnOnce(Socat) -> Option<Socat>,
+) -> Option<Output> {
+    let dir = scratch(test);
+    let socat = socat_pair(&dir, test)?;
     let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
     let to = format!("udpout:{}", socket.local_addr().unwrap());
-    let args = [
-        "companion",
-        "--lidar",
-        "xv11",
-        "--port",
-        p(&socat.b),
-        "--idle-timeout",
-        "1",
-        "--mavlink",
-        &to,
-        "--json",
-    ];
     let child = Command::new(BIN)
-        .args(args)
+        .args(["companion", "--lidar", "xv11", "--port", p(&socat.b)])
+        .args(["--idle-timeout", idle_timeout_s, "--mavlink", &to, "--json"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     std::thread::sleep(Duration::from_millis(500));
-    std::fs::write(&socat.a, std::fs::read(capture()).unwrap()).unwrap();
-    let out: Output = child.wait_with_output().unwrap();
+    let _plugged = feed(socat);
+    Some(child.wait_with_output().unwrap())
+}
+
+#[test]
+fn a_lidar_port_that_falls_silent_ends_the_run_with_what_it_sent() {
+    let Some(out) = live("companion-silent", "1", |socat| {
+        std::fs::write(&socat.a, std::fs::read(capture()).unwrap()).unwrap();
+        Some(socat)
+    }) else {
+        return;
+    };
     assert!(out.status.success(), "{}", stderr(&out));
     let s = last_json(&out);
     assert_eq!(s["stopped_by_silence"], true, "{s}");
@@ -270,25 +274,14 @@ fn a_lidar_port_that_falls_silent_ends_the_run_with_what_it_sent() {
 
 #[test]
 fn a_lidar_port_that_vanishes_mid_run_keeps_what_was_sent_and_fails() {
-    let dir = scratch("companion-vanish");
-    let Some(socat) = socat_pair(&dir, "a_lidar_port_that_vanishes_mid_run") else {
+    let Some(out) = live("companion-vanish", "5", |socat| {
+        let bytes = std::fs::read(capture()).unwrap();
+        std::fs::write(&socat.a, &bytes[..bytes.len() / 2]).unwrap();
+        std::thread::sleep(Duration::from_millis(500));
+        None // the adapter is unplugged
+    }) else {
         return;
     };
-    let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
-    let to = format!("udpout:{}", socket.local_addr().unwrap());
-    let child = Command::new(BIN)
-        .args(["companion", "--lidar", "xv11", "--port", p(&socat.b)])
-        .args(["--idle-timeout", "5", "--mavlink", &to, "--json"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(Duration::from_millis(500));
-    let bytes = std::fs::read(capture()).unwrap();
-    std::fs::write(&socat.a, &bytes[..bytes.len() / 2]).unwrap();
-    std::thread::sleep(Duration::from_millis(500));
-    drop(socat); // the adapter is unplugged
-    let out = child.wait_with_output().unwrap();
     assert!(
         !out.status.success(),
         "a vanished port ended the run as if asked"
