@@ -148,7 +148,7 @@ fn run_with<L: AutopilotLink>(
         companion.revolution(rec)?;
         let t = rec.timestamp_s;
         span = Some((span.map_or(t, |s| s.0), t));
-        Ok(true)
+        Ok(())
     })?;
     if companion.empty_scans > 0 {
         eprintln!(

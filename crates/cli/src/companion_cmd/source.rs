@@ -57,13 +57,13 @@ impl Pacer {
     }
 }
 
-/// Hands every revolution of `source` to `on_scan` as it completes; `on_scan` returns `false`
-/// to stop. `pacer`: play a replay at the pace of its stamps (a live port is paced by the
+/// Hands every revolution of `source` to `on_scan` as it completes; an error from `on_scan`
+/// ends the run. `pacer`: play a replay at the pace of its stamps (a live port is paced by the
 /// device).
 pub fn each_revolution(
     source: &Source,
     mut pacer: Option<Pacer>,
-    mut on_scan: impl FnMut(&LaserRecord) -> Result<bool, CliError>,
+    mut on_scan: impl FnMut(&LaserRecord) -> Result<(), CliError>,
 ) -> Result<SourceEnd, CliError> {
     let mut paced = |rec: &LaserRecord| {
         if let Some(p) = pacer.as_mut() {
@@ -76,7 +76,7 @@ pub fn each_revolution(
         Source::Capture { path, device, baud } => {
             let input = open_input(path)?;
             let summary = decode_stream(*device, input.reader, &input.name, *baud, |s| {
-                paced(&s.record)
+                paced(&s.record).map(|()| true)
             })?;
             require_frames(&input.name, *device, &summary)?;
             Ok(SourceEnd {
@@ -89,9 +89,7 @@ pub fn each_revolution(
             let mut any = false;
             while let Some(rec) = reader.next_scan()? {
                 any = true;
-                if !paced(&rec)? {
-                    break;
-                }
+                paced(&rec)?;
             }
             report_bad_lines(reader.stats());
             if !any {
@@ -104,10 +102,9 @@ pub fn each_revolution(
 
 /// The pipeline as a recorder's sink: the raw bytes are not kept, each scan goes through.
 struct Through<'a> {
-    on_scan: &'a mut dyn FnMut(&LaserRecord) -> Result<bool, CliError>,
-    /// Why the pipeline ended the run: `Some(Ok)` when it asked to stop, an error when it
-    /// failed (the autopilot's port gone).
-    stop: Option<Result<(), CliError>>,
+    on_scan: &'a mut dyn FnMut(&LaserRecord) -> Result<(), CliError>,
+    /// Why the pipeline ended the run (the autopilot's port gone).
+    stop: Option<CliError>,
 }
 
 impl RecordSink for Through<'_> {
@@ -116,24 +113,17 @@ impl RecordSink for Through<'_> {
     }
 
     fn scan(&mut self, scan: &DecodedScan) -> io::Result<()> {
-        match (self.on_scan)(&scan.record) {
-            Ok(true) => Ok(()),
-            Ok(false) => {
-                self.stop = Some(Ok(()));
-                Err(io::Error::other("stopped"))
-            }
-            Err(e) => {
-                let text = e.0.clone();
-                self.stop = Some(Err(e));
-                Err(io::Error::other(text))
-            }
-        }
+        (self.on_scan)(&scan.record).map_err(|e| {
+            let text = e.0.clone();
+            self.stop = Some(e);
+            io::Error::other(text)
+        })
     }
 }
 
 fn live(
     opts: &RecordOptions,
-    on_scan: &mut dyn FnMut(&LaserRecord) -> Result<bool, CliError>,
+    on_scan: &mut dyn FnMut(&LaserRecord) -> Result<(), CliError>,
 ) -> Result<SourceEnd, CliError> {
     let port = open_port(opts)?;
     let mut sink = Through {
@@ -141,16 +131,13 @@ fn live(
         stop: None,
     };
     let recorded = port.record(&mut sink)?;
-    // A failure of the pipeline itself (the autopilot's port gone) ends the run as an error;
-    // a stop it asked for is no failure.
-    let failure = match sink.stop {
-        Some(Err(e)) => return Err(e),
-        Some(Ok(())) => None,
-        None => recorded.failure.map(|f| f.to_string()),
-    };
+    // A failure of the pipeline itself (the autopilot's port gone) ends the run as an error.
+    if let Some(e) = sink.stop {
+        return Err(e);
+    }
     let end = SourceEnd {
         stopped_by_silence: recorded.stopped_by_silence,
-        failure,
+        failure: recorded.failure.map(|f| f.to_string()),
         decode: Some(recorded.summary),
     };
     if let Some(summary) = &end.decode {
