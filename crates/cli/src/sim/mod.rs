@@ -3,9 +3,12 @@
 //! `plumbline-sim`'s; this command parses, writes files, plots and prints.
 
 mod explore;
+mod ground;
+mod mavlink;
 mod model_error;
 mod onboard;
 mod outputs;
+mod pace;
 pub(crate) mod plot;
 mod world;
 
@@ -71,6 +74,8 @@ pub struct SimArgs {
     /// (NAME.world, NAME.pgm, NAME.yaml in --out, NAME from the log's file name).
     #[arg(long, value_name = "LOG")]
     pub rasterize: Option<PathBuf>,
+    #[command(flatten)]
+    pub ground: ground::GroundArgs,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Write scans.clf, imu.csv, sonar.csv, truth.txt, truth.relations, summary.json and plots.
@@ -289,12 +294,13 @@ pub fn run(args: SimArgs) -> CliResult {
     let entry = scenario::find(&args.scenario)
         .ok_or_else(|| CliError(format!("unknown scenario {}", args.scenario)))?;
     let options = args.closed_loop.options(args.duration);
-    let flight = entry
+    let mut flight = entry
         .prepare(&options, &mut config)
         .map_err(|e| scenario_error(&args, e))?;
     if let Some(dir) = args.out.as_deref() {
         check_inputs_outside(&args, dir)?;
     }
+    let linked = ground::link(&args.ground, &mut flight)?;
     // Every check has passed: from here on the run starts, so the files may be staged.
     let logs = args.out.as_deref().map(SensorLogs::create).transpose()?;
     let bar = progress(flight.planned_s.ceil() as u64, "sim");
@@ -324,6 +330,9 @@ pub fn run(args: SimArgs) -> CliResult {
         if let Some(dir) = args.out.as_deref() {
             explore::plots(dir, &config, exploration, &collector.states)?;
         }
+    }
+    if let Some(stats) = &linked.mavlink {
+        summary["mavlink"] = stats.borrow().summary();
     }
     if let (Some(dir), Some(logs)) = (args.out.as_deref(), collector.logs.take()) {
         let poses = logs.finish(dir)?;

@@ -3,7 +3,7 @@
 //! until the wall clock has caught up with the simulated one.
 
 use plumbline_core::msgs::GroundMessages;
-use plumbline_sim::runner::ground::{GroundStation, VehicleReport};
+use plumbline_sim::runner::ground::{GroundStation, Parameters, VehicleReport};
 use std::time::{Duration, Instant};
 
 /// Sleeps shorter than this are skipped (and made up at a later step): the kernel's sleep is
@@ -27,7 +27,7 @@ impl Pacer {
 }
 
 impl GroundStation for Pacer {
-    fn exchange(&mut self, vehicle: &VehicleReport<'_>) -> GroundMessages {
+    fn exchange(&mut self, vehicle: &VehicleReport<'_>, _: &mut Parameters<'_>) -> GroundMessages {
         let (wall0, t0_s) = *self.started.get_or_insert((Instant::now(), vehicle.t_s));
         let due = Duration::from_secs_f64(((vehicle.t_s - t0_s) / self.speed).max(0.0));
         if let Some(ahead) = due.checked_sub(wall0.elapsed()) {

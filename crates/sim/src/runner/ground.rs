@@ -7,7 +7,9 @@
 //! [`GroundStation`]. Several may be linked at once; without one the onboard stack flies exactly
 //! as it does alone.
 
-use plumbline_core::flight::events::{Event, EventLog};
+use plumbline_core::flight::autopilot::Autopilot;
+use plumbline_core::flight::events::Event;
+use plumbline_core::flight::params::{self, ParamError, ParamInfo};
 use plumbline_core::msgs::{
     BatterySample, GroundCommand, GroundMessages, ImuSample, Outputs, SonarSample,
 };
@@ -39,12 +41,48 @@ pub struct VehicleReport<'a> {
     pub events_missed: u32,
 }
 
+/// The autopilot's tuning as the ground reads and sets it: named, bounded parameters (the
+/// registry of [`plumbline_core::flight::params`]). A value is checked against its bounds and
+/// the rest of the tuning, and takes effect at the next step.
+pub struct Parameters<'a> {
+    autopilot: &'a mut Autopilot,
+}
+
+impl<'a> Parameters<'a> {
+    pub(crate) fn new(autopilot: &'a mut Autopilot) -> Self {
+        Self { autopilot }
+    }
+
+    pub fn count(&self) -> usize {
+        params::count()
+    }
+
+    /// Name, unit, bounds and meaning of parameter `index`.
+    pub fn info(&self, index: usize) -> Option<&'static ParamInfo> {
+        params::info(index)
+    }
+
+    /// The value in force of parameter `index`.
+    pub fn get(&self, index: usize) -> Option<f32> {
+        self.autopilot.param(index)
+    }
+
+    /// Sets parameter `index`; returns the value now in force, or why nothing changed.
+    pub fn set(&mut self, index: usize, value: f32) -> Result<f32, ParamError> {
+        self.autopilot.set_param(index, value)
+    }
+}
+
 /// A ground station linked to the vehicle.
 pub trait GroundStation {
-    /// Called after each onboard step with what the vehicle reports; returns what the ground
-    /// sent meanwhile, handed to the autopilot at the next step. It must not block: the
-    /// vehicle's loop waits for it.
-    fn exchange(&mut self, vehicle: &VehicleReport<'_>) -> GroundMessages;
+    /// Called after each onboard step with what the vehicle reports and its parameters;
+    /// returns what the ground sent meanwhile, handed to the autopilot at the next step. It
+    /// must not block: the vehicle's loop waits for it.
+    fn exchange(
+        &mut self,
+        vehicle: &VehicleReport<'_>,
+        parameters: &mut Parameters<'_>,
+    ) -> GroundMessages;
 }
 
 /// Commands waiting for their step, at most this many; more within a few milliseconds is a
@@ -88,13 +126,10 @@ impl GroundLink {
         }
     }
 
-    /// Reports a step to every station (`report` without its events: they come from
-    /// `events`) and queues what they sent.
-    pub(crate) fn exchange<const E: usize>(
-        &mut self,
-        report: VehicleReport<'_>,
-        events: &EventLog<E>,
-    ) {
+    /// Reports a step to every station (`report` without its events: they come from the
+    /// autopilot's log) and queues what they sent.
+    pub(crate) fn exchange(&mut self, report: VehicleReport<'_>, autopilot: &mut Autopilot) {
+        let events = autopilot.events();
         let new = events.total().wrapping_sub(self.events_seen);
         self.events_seen = events.total();
         self.new_events.clear();
@@ -106,8 +141,9 @@ impl GroundLink {
             events_missed: new.saturating_sub(self.new_events.len() as u32),
             ..report
         };
+        let mut parameters = Parameters::new(autopilot);
         for station in &mut self.stations {
-            let sent = station.exchange(&report);
+            let sent = station.exchange(&report, &mut parameters);
             self.heartbeat |= sent.heartbeat;
             match sent.command {
                 // The kill switch jumps the queue and is never dropped.

@@ -280,7 +280,7 @@ impl<const N: usize> OnboardLink<N> {
                 events: &[],
                 events_missed: 0,
             };
-            ground.exchange(report, self.onboard.autopilot().events());
+            ground.exchange(report, self.onboard.autopilot_mut());
         }
         if let (None, Some(m), FlightMode::Hold) =
             (self.mission_shift_s, &self.script.mission, out.mode)
