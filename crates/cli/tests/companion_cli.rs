@@ -1,6 +1,6 @@
 //! `plumbline companion` end to end: recorded lidar data through the SLAM into a UDP socket on
 //! loopback, every datagram decoded as MAVLink 2 (the `mavlink` crate here; pymavlink in
-//! `scripts/companion_client.py`, run by the last test), and bad input as clear errors.
+//! `tests/mavlink/companion_client.py`, run by the last test), and bad input as clear errors.
 
 mod support;
 
@@ -301,7 +301,7 @@ fn pymavlink_as_the_autopilot_accepts_every_message() {
         "{} is missing: run scripts/setup.sh (it makes the venv with pymavlink)",
         python.display()
     );
-    let script = Path::new(REPO).join("scripts/companion_client.py");
+    let script = Path::new(REPO).join("tests/mavlink/companion_client.py");
     let out = Command::new(&python)
         .arg(&script)
         .arg(BIN)
