@@ -150,12 +150,12 @@ fn a_kill_from_the_ground_stops_the_motors_at_the_next_step() {
     assert!(motors_after.iter().all(|s| s.motors == [0.0; 4]));
 }
 
-/// The value before each attempt and what the attempt returned.
-type Attempts = Vec<(Option<f32>, Result<f32, ParamError>)>;
+/// Each set's value before it and its result.
+type SetResults = Rc<RefCell<Vec<(Option<f32>, Result<f32, ParamError>)>>>;
 
 /// A station that sets parameter 0 once in range and once out of it, keeping what it saw.
 struct Tuner {
-    results: Rc<RefCell<Attempts>>,
+    results: SetResults,
 }
 
 impl GroundStation for Tuner {
