@@ -9,9 +9,7 @@
 //! reaches its weight bound and falls back to the cheaper baseline mid-measurement.
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
-use plumbline_core::control::cascade::{
-    Cascade, CascadeConfig, CascadeSetpoint, Integrals, Vertical,
-};
+use plumbline_core::control::cascade::{Cascade, CascadeConfig, CascadeSetpoint, Vertical};
 use plumbline_core::control::mixer::Demand;
 use plumbline_core::control::mrac::MracConfig;
 use plumbline_core::msgs::EstimatedState;
@@ -59,21 +57,13 @@ fn steps(c: &mut Criterion) {
     let mut g = c.benchmark_group("cascade_step");
     for (name, mut warm) in [("pid", pid), ("mrac", mrac)] {
         for _ in 0..50 {
-            let _ = warm.run(&SETPOINT, &s, gyro, dt, Integrals::All);
+            let _ = warm.run(&SETPOINT, &s, gyro, dt, true);
             warm.actuated(&hover, true);
         }
         g.bench_function(name, |b| {
             b.iter_batched_ref(
                 || warm,
-                |cascade| {
-                    cascade.run(
-                        black_box(&SETPOINT),
-                        black_box(&s),
-                        gyro,
-                        dt,
-                        Integrals::All,
-                    )
-                },
+                |cascade| cascade.run(black_box(&SETPOINT), black_box(&s), gyro, dt, true),
                 BatchSize::SmallInput,
             )
         });

@@ -48,19 +48,6 @@ impl FeedForward {
     }
 }
 
-/// Which integrals may run this step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Integrals {
-    /// All of them: in the air, the mixer not saturated.
-    All,
-    /// Only the climb integral: taking off from the floor, which holds the attitude and the
-    /// position still, while the climb integral finds the collective a vehicle heavier or weaker
-    /// than its model needs to leave it (the proportional term alone may not lift it).
-    Climb,
-    /// None: on the floor, or the mixer saturated.
-    Frozen,
-}
-
 /// What the guidance asks of the cascade.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CascadeSetpoint {
@@ -229,15 +216,15 @@ impl Cascade {
 
     /// Runs the four loops: setpoint and estimate in, mixer demand out. The position and
     /// velocity loops run once `outer_period_s` has passed (over the time since they last
-    /// ran), the attitude and rate loops every call. `integrals` says which integrals of the
-    /// loops that run may move.
+    /// ran), the attitude and rate loops every call. `integrate` false freezes the integrals
+    /// that run (the mixer saturated last step, or the vehicle is on the ground).
     pub fn run(
         &mut self,
         setpoint: &CascadeSetpoint,
         state: &EstimatedState,
         gyro_rad_s: [f32; 3],
         dt: f32,
-        integrals: Integrals,
+        integrate: bool,
     ) -> Result<Demand, PidError> {
         let elapsed = self.outer_elapsed_s + dt;
         // Half a step of slack, so rounding in the sum does not skip a period.
@@ -260,7 +247,7 @@ impl Cascade {
                             setpoint.yaw_rad,
                             state,
                             elapsed,
-                            integrals,
+                            integrate,
                         )?
                     }
                 };
@@ -284,7 +271,6 @@ impl Cascade {
             );
         }
         let rate_sp = self.rate_setpoint(&target, state, dt)?;
-        let integrate = integrals == Integrals::All;
         self.demand(&target, rate_sp, gyro_rad_s, dt, integrate)
     }
 
@@ -389,9 +375,8 @@ impl Cascade {
         yaw_sp: f32,
         state: &EstimatedState,
         dt: f32,
-        integrals: Integrals,
+        integrate: bool,
     ) -> Result<AttitudeTarget, PidError> {
-        let integrate = integrals == Integrals::All;
         let mut accel = [0.0; 3];
         match velocity_sp.horizontal_m_s {
             Some(target) => {
@@ -407,8 +392,7 @@ impl Cascade {
             }
         }
         let vz = state.velocity_m_s[2];
-        let climb = integrals != Integrals::Frozen;
-        accel[2] = self.velocity[2].update(velocity_sp.climb_m_s, vz, 0.0, dt, climb)?;
+        accel[2] = self.velocity[2].update(velocity_sp.climb_m_s, vz, 0.0, dt, integrate)?;
         Ok(self.invert(accel, yaw_sp, state))
     }
 
@@ -522,7 +506,7 @@ mod tests {
         let mut c = Cascade::new(CascadeConfig::default());
         let s = level_at([1.0, 2.0, 1.0]);
         let d = c
-            .run(&hold([1.0, 2.0, 1.0]), &s, [0.0; 3], 0.002, Integrals::All)
+            .run(&hold([1.0, 2.0, 1.0]), &s, [0.0; 3], 0.002, true)
             .unwrap();
         assert!((d.collective - c.config.hover_collective).abs() < 1e-6);
         assert_eq!((d.roll, d.pitch, d.yaw), (0.0, 0.0, 0.0));
@@ -539,9 +523,9 @@ mod tests {
         let s = level_at([0.0, 0.0, 1.0]);
         let dt = config.outer_period_s;
         for c in [&mut raw, &mut smooth] {
-            c.run(&hold([0.0, 0.0, 1.0]), &s, [0.0; 3], dt, Integrals::Frozen)
+            c.run(&hold([0.0, 0.0, 1.0]), &s, [0.0; 3], dt, false)
                 .unwrap();
-            c.run(&hold([0.3, 0.0, 1.0]), &s, [0.0; 3], dt, Integrals::Frozen)
+            c.run(&hold([0.3, 0.0, 1.0]), &s, [0.0; 3], dt, false)
                 .unwrap();
         }
         let pitch = |c: &Cascade| c.held.unwrap().pitch_rad;
@@ -551,7 +535,7 @@ mod tests {
         assert!((pitch(&smooth) - step / 11.0).abs() < 1e-6 * step.max(1.0));
         for _ in 0..200 {
             smooth
-                .run(&hold([0.3, 0.0, 1.0]), &s, [0.0; 3], dt, Integrals::Frozen)
+                .run(&hold([0.3, 0.0, 1.0]), &s, [0.0; 3], dt, false)
                 .unwrap();
         }
         assert!(
@@ -576,9 +560,7 @@ mod tests {
         };
         let v = c.velocity_setpoint(&sp, &s, 0.01).unwrap();
         assert_eq!(v.accel_m_s2, [1.0, 0.0]);
-        let t = c
-            .attitude_target(v, 0.0, &s, 0.01, Integrals::Frozen)
-            .unwrap();
+        let t = c.attitude_target(v, 0.0, &s, 0.01, false).unwrap();
         // Thrust tilted forward so that its horizontal share is 1 m/s^2 at 1 g of lift.
         let forward = GRAVITY_M_S2 * libm::tanf(t.pitch_rad);
         assert!((forward - 1.0).abs() < 1e-4, "{t:?}");
@@ -617,7 +599,7 @@ mod tests {
             .unwrap();
         let kp = c.config.position_xy.kp;
         assert_eq!(v, level([kp * 0.25, 0.0], 0.0));
-        let t = c.attitude_target(v, 0.0, &s, 0.01, Integrals::All).unwrap();
+        let t = c.attitude_target(v, 0.0, &s, 0.01, true).unwrap();
         assert!(t.pitch_rad > 0.0 && t.roll_rad.abs() < 1e-6);
         // Heading 90 degrees: the world +x target is now to the vehicle's right.
         let s_left = EstimatedState {
@@ -625,7 +607,7 @@ mod tests {
             ..s
         };
         let t = Cascade::new(CascadeConfig::default())
-            .attitude_target(level([0.5, 0.0], 0.0), 0.0, &s_left, 0.01, Integrals::All)
+            .attitude_target(level([0.5, 0.0], 0.0), 0.0, &s_left, 0.01, true)
             .unwrap();
         assert!(t.roll_rad > 0.0 && t.pitch_rad.abs() < 1e-5, "{t:?}");
     }
@@ -639,7 +621,7 @@ mod tests {
             .unwrap();
         assert_eq!(v, level([1.0, -1.0], 0.0));
         let t = c
-            .attitude_target(level([50.0, 50.0], 0.0), 0.0, &s, 0.01, Integrals::All)
+            .attitude_target(level([50.0, 50.0], 0.0), 0.0, &s, 0.01, true)
             .unwrap();
         let tilt = libm::acosf(cosf(t.roll_rad) * cosf(t.pitch_rad));
         assert!(tilt <= 0.35 + 1e-3, "{tilt}");
@@ -653,7 +635,7 @@ mod tests {
             ..level_at([0.0; 3])
         };
         let t = c
-            .attitude_target(level([0.0; 2], 0.0), 0.0, &tilted, 0.01, Integrals::Frozen)
+            .attitude_target(level([0.0; 2], 0.0), 0.0, &tilted, 0.01, false)
             .unwrap();
         assert!((t.collective - c.config.hover_collective / cosf(0.3)).abs() < 1e-5);
         let climb = CascadeSetpoint {
@@ -665,7 +647,7 @@ mod tests {
             .unwrap();
         assert_eq!(v.climb_m_s, 0.5);
         let t = c
-            .attitude_target(v, 0.0, &level_at([0.0; 3]), 0.01, Integrals::Frozen)
+            .attitude_target(v, 0.0, &level_at([0.0; 3]), 0.01, false)
             .unwrap();
         assert!(t.collective > c.config.hover_collective);
     }
@@ -682,7 +664,7 @@ mod tests {
             yaw_rad: 0.0,
         };
         let v = c.velocity_setpoint(&sp, &s, 0.01).unwrap();
-        let t = c.attitude_target(v, 0.0, &s, 0.01, Integrals::All).unwrap();
+        let t = c.attitude_target(v, 0.0, &s, 0.01, true).unwrap();
         assert_eq!((t.roll_rad, t.pitch_rad), (0.0, 0.0));
         // Descending from rest: less than hover collective.
         assert!(t.collective < c.config.hover_collective);
@@ -696,8 +678,7 @@ mod tests {
         let dt = 0.002;
         let mut still = Cascade::new(CascadeConfig::default());
         let mut moved = still;
-        let step =
-            |c: &mut Cascade, s: &EstimatedState| c.run(&sp, s, [0.0; 3], dt, Integrals::All);
+        let step = |c: &mut Cascade, s: &EstimatedState| c.run(&sp, s, [0.0; 3], dt, true);
         assert_eq!(step(&mut still, &here), step(&mut moved, &here));
         // The position loop of `moved` does not see the displacement until 10 ms have passed.
         for _ in 0..4 {
@@ -754,7 +735,7 @@ mod tests {
         let mut c = Cascade::new(CascadeConfig::default());
         let s = level_at([f32::NAN, 0.0, 1.0]);
         assert_eq!(
-            c.run(&hold([0.0, 0.0, 1.0]), &s, [0.0; 3], 0.01, Integrals::All),
+            c.run(&hold([0.0, 0.0, 1.0]), &s, [0.0; 3], 0.01, true),
             Err(PidError::NonFinite)
         );
     }
@@ -769,7 +750,7 @@ mod tests {
         let mut rates = [0.0f32; 3];
         let dt = 0.002;
         for _ in 0..5000 {
-            let d = c.run(&sp, &s, rates, dt, Integrals::All).unwrap();
+            let d = c.run(&sp, &s, rates, dt, true).unwrap();
             // The plant the configuration declares: effectiveness x deflection.
             let e = c.config.effectiveness_rad_s2;
             rates[0] += e[0] * d.roll * dt;

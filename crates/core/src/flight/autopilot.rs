@@ -9,7 +9,7 @@
 use super::events::{EventKind, EventLog};
 use super::mission::Mission;
 use super::supervisor::{Status, Supervisor, EVENT_LOG_LEN};
-use crate::control::cascade::{Cascade, CascadeSetpoint, FeedForward, Integrals, Vertical};
+use crate::control::cascade::{Cascade, CascadeSetpoint, FeedForward, Vertical};
 use crate::control::mixer::{Demand, Mixer};
 use crate::control::mrac::{FallbackReason, Mrac, AUTOPILOT_CENTRES};
 use crate::control::sas;
@@ -230,15 +230,8 @@ impl Autopilot {
             (FlightMode::Disarmed | FlightMode::Killed, _) => None,
             (FlightMode::Manual, _) => Some(self.manual(&pilot, rates)),
             (_, Some(sp)) => {
-                let integrals = match (self.saturated, airborne, mode) {
-                    (true, _, _) => Integrals::Frozen,
-                    (false, true, _) => Integrals::All,
-                    // Still on the floor: only the climb integral can lift a vehicle the hover
-                    // collective underestimates, and nothing else but the floor acts on it.
-                    (false, false, FlightMode::Takeoff) => Integrals::Climb,
-                    (false, false, _) => Integrals::Frozen,
-                };
-                let demand = match self.cascade.run(&sp, &estimate, rates, dt, integrals) {
+                let integrate = airborne && !self.saturated;
+                let demand = match self.cascade.run(&sp, &estimate, rates, dt, integrate) {
                     Ok(d) => d,
                     Err(_) => {
                         self.faults.control_errors = self.faults.control_errors.saturating_add(1);
@@ -282,7 +275,7 @@ impl Autopilot {
     }
 
     /// Mode entry actions: capture the hold point (a mission's landing lands at `land_xy`),
-    /// forget controller history (except from take-off into hold).
+    /// forget controller history.
     fn enter(&mut self, mode: FlightMode, e: &EstimatedState, t_s: f64, land_xy: [f32; 2]) {
         let here = PositionSetpoint {
             position_m: e.position_m,
@@ -311,12 +304,7 @@ impl Autopilot {
             FlightMode::Land | FlightMode::Manual | FlightMode::Explore | FlightMode::Return => {}
         }
         self.mission.enter(mode, t_s);
-        // The end of a take-off is the same hold point flown on: its integrals carry the
-        // collective a vehicle heavier or weaker than its model needs, and forgetting them
-        // dropped such a vehicle half a metre as it began to hold.
-        if !(self.mode == FlightMode::Takeoff && mode == FlightMode::Hold) {
-            self.cascade.reset();
-        }
+        self.cascade.reset();
         self.mode = mode;
     }
 
