@@ -49,13 +49,23 @@ impl Ekf {
             return Outcome::Invalid;
         }
         let k = cosf(roll) * cosf(pitch);
-        let height = range_m * k - c.mount_height_m;
         // "Too close" is an inequality: an estimate at or below the bound agrees with it, one
         // above it is pulled to the bound (a constrained filter's projection). Without it a
         // vehicle still on the floor after arming has no vertical measurement at all, and the
         // IMU-only height can drift up to the take-off height while the vehicle sits there.
+        // The bound lies three sigmas of range above the minimum: a floor that far can still
+        // read as the minimum (rounding to whole inches, noise, a reading up to 50 ms old in a
+        // climb), and pulling an estimate that is right would bend every take-off's climb.
+        let range_m = if too_close {
+            c.min_range_m + 3.0 * c.range_std_m
+        } else {
+            range_m
+        };
+        let height = range_m * k - c.mount_height_m;
+        // An estimate the bound does not move is told nothing: the reading is refused as it
+        // always was, so it neither ends nor extends a run of rejections (the touchdown reset).
         if too_close && self.x[ix::POS + 2] <= height {
-            return Outcome::Accepted;
+            return Outcome::Invalid;
         }
         let mut h = SMatrix::<f32, 1, N>::zeros();
         h[(0, ix::POS + 2)] = 1.0;
@@ -112,13 +122,15 @@ mod tests {
         for _ in 0..5 {
             assert_eq!(f.fuse_sonar(&c, 0.1524, 0.0, 0.0), Outcome::Accepted);
         }
+        // The bound: the minimum and three sigmas of range, 0.24 m.
         let z = f.x[ix::POS + 2];
-        assert!(z < 0.1524 + 0.03 && z > 0.1, "height {z}");
-        // A height under the bound agrees with it and is left where it is.
+        assert!(z < 0.2424 + 0.03 && z > 0.2, "height {z}");
+        // A height under the bound agrees with it and is left where it is, even a little above
+        // the minimum (a climb the 20 Hz sonar has not seen yet).
         let mut f = Ekf::new(EkfConfig::default());
-        f.x[ix::POS + 2] = 0.05;
+        f.x[ix::POS + 2] = 0.2;
         let before = f.x;
-        assert_eq!(f.fuse_sonar(&c, 0.1524, 0.0, 0.0), Outcome::Accepted);
+        assert_eq!(f.fuse_sonar(&c, 0.1524, 0.0, 0.0), Outcome::Invalid);
         assert_eq!(f.x, before);
     }
 
