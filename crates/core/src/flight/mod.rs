@@ -3,8 +3,11 @@
 pub mod autopilot;
 mod autopilot_config;
 pub mod events;
+pub mod ground;
 pub mod mission;
 pub mod onboard;
+mod param_table;
+pub mod params;
 pub mod supervisor;
 #[cfg(test)]
 mod test_vehicle;
@@ -12,3 +15,5 @@ mod test_vehicle;
 mod mission_tests;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod ground_flight_tests;

@@ -257,6 +257,7 @@ impl<const N: usize> OnboardLink<N> {
                 m.setpoint(frame.t_s - shift)
             }),
             companion: messages,
+            ground: Default::default(),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         if let (None, Some(m), FlightMode::Hold) =
