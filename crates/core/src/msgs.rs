@@ -344,7 +344,9 @@ pub enum GroundCommand {
     Arm,
     Disarm,
     /// Take off and hold; `None` keeps the configured hold height (m above the take-off floor).
-    Takeoff { height_m: Option<f32> },
+    Takeoff {
+        height_m: Option<f32>,
+    },
     Land,
     /// Fly back to the take-off point and land.
     Return,
