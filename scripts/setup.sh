@@ -7,3 +7,15 @@ if ! command -v socat >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1; the
   (apt-get update -qq && apt-get install -y -qq socat) >/dev/null 2>&1 \
     || echo "setup: could not install socat; the lidar serial-port tests will skip" >&2
 fi
+# The real-client tests' Python packages (pymavlink as the ground station) live in .venv at the
+# repository root, made from scripts/requirements-test.txt; Debian's python needs python3-venv.
+root="$(cd "$(dirname "$0")/.." && pwd)"
+if ! python3 -c 'import venv, ensurepip' >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1; then
+  (apt-get update -qq && apt-get install -y -qq python3-venv) >/dev/null 2>&1 \
+    || echo "setup: could not install python3-venv" >&2
+fi
+if [ ! -x "$root/.venv/bin/python" ]; then
+  python3 -m venv "$root/.venv"
+fi
+"$root/.venv/bin/python" -m pip install -q --disable-pip-version-check \
+  -r "$root/scripts/requirements-test.txt"

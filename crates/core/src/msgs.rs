@@ -226,6 +226,9 @@ pub enum FailsafeReason {
     KillSwitch,
     /// The companion sent no setpoint for too long during a mission: held, then landed.
     CompanionLost,
+    /// A ground station that had been heard went silent (no heartbeat for
+    /// `GroundConfig::link_timeout_s`), or its manual sticks stopped: held, then landed.
+    LinkLost,
 }
 
 /// Everything the vehicle hands the autopilot for one step.
@@ -245,6 +248,8 @@ pub struct Inputs {
     pub mission: Option<MissionSetpoint>,
     /// What the companion computer sent since the last step (all `None` without one).
     pub companion: CompanionMessages,
+    /// What the ground station sent since the last step (nothing without one).
+    pub ground: GroundMessages,
 }
 
 /// What the autopilot hands back after one step.
@@ -257,6 +262,8 @@ pub struct Outputs {
     pub estimate: EstimatedState,
     /// The position setpoint being flown, when the mode has one.
     pub setpoint: Option<PositionSetpoint>,
+    /// The answer to this step's ground command, if one arrived (the link's COMMAND_ACK).
+    pub ground_ack: Option<GroundAck>,
 }
 
 /// A pose from the companion computer's SLAM: where the vehicle is in the companion's map frame.
@@ -363,6 +370,57 @@ pub enum GroundMode {
     Hold,
     Explore,
     Manual,
+}
+
+/// Everything a ground station hands the flight part in one step, after the link layer has
+/// decoded and checked it. At most one command per step: a link that received several queues
+/// them, one per step (the kill switch first).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GroundMessages {
+    pub command: Option<GroundCommand>,
+    /// A ground-station heartbeat arrived since the last step: the link is alive. Once one has
+    /// been heard, their absence raises the link-lost failsafe.
+    pub heartbeat: bool,
+}
+
+/// The autopilot's answer to a [`GroundCommand`], given in the step that received it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroundAck {
+    pub command: GroundCommand,
+    pub result: CommandResult,
+}
+
+/// Whether a ground command was carried out (MAVLink COMMAND_ACK: `Accepted` is
+/// MAV_RESULT_ACCEPTED, `Refused` TEMPORARILY_REJECTED, `InvalidParameter` DENIED).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CommandResult {
+    /// Carried out this step (or already the case, e.g. arming an armed vehicle).
+    Accepted,
+    /// Not in the current mode or state; the same command may succeed later.
+    Refused(Refusal),
+    /// A parameter is not finite or outside its bounds (a take-off height, stick values).
+    InvalidParameter,
+}
+
+/// Why a ground command was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refusal {
+    /// The current mode does not take this command.
+    WrongMode,
+    /// A disarm while flying: land instead.
+    Airborne,
+    /// The radio's manual or kill switch is on: the pilot on the radio is in charge.
+    RadioInCharge,
+    /// Exploring and returning follow a companion computer, and none is talking.
+    NoCompanion,
+    /// The estimate is not good enough to fly on autonomously.
+    EstimateInvalid,
+    /// The battery is critical: no arming.
+    BatteryCritical,
+    /// The motors are killed: only a disarm (releasing the latch) or a terminate is taken.
+    Killed,
+    /// A manual takeover needs recent sticks from the ground station first.
+    NoSticks,
 }
 
 /// Stick positions from a ground station (MANUAL_CONTROL), normalised like [`PilotInput`]'s.

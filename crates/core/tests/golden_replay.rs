@@ -70,6 +70,7 @@ fn parse_inputs(text: &str) -> Vec<Step> {
                     pilot,
                     mission: None,
                     companion: Default::default(),
+                    ground: Default::default(),
                 },
                 scan: None,
             });

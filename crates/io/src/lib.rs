@@ -6,6 +6,7 @@
 pub mod carmen;
 pub mod eval;
 pub mod input;
+pub mod link_port;
 pub mod output;
 mod pose_math;
 pub mod relations;

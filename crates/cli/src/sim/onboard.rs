@@ -112,6 +112,7 @@ fn failsafe_name(r: FailsafeReason) -> &'static str {
         FailsafeReason::BatteryCritical => "battery_critical",
         FailsafeReason::KillSwitch => "kill_switch",
         FailsafeReason::CompanionLost => "companion_lost",
+        FailsafeReason::LinkLost => "link_lost",
     }
 }
 

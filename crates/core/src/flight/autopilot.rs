@@ -270,6 +270,7 @@ impl Autopilot {
             failsafe,
             estimate,
             setpoint: setpoint.map(|sp| self.report(&sp, &estimate)),
+            ground_ack: None,
         };
         self.last
     }

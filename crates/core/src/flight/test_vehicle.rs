@@ -197,6 +197,7 @@ impl TestVehicle {
             pilot: self.pilot,
             mission: None,
             companion: Default::default(),
+            ground: Default::default(),
         }
     }
 }

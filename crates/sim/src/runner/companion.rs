@@ -10,6 +10,7 @@
 //! runs inline (the SLAM backend too), so a run is a function of its seed.
 
 use super::fix_covariance::fix_covariance;
+use super::ground::GroundStation;
 use super::onboard_link::{
     CompanionComputer, FlightLog, OnboardLink, WithCompanion, LARGE_SCAN_BEAMS, XV11_BEAMS,
 };
@@ -409,6 +410,14 @@ impl AnyExploreCrew {
         match self {
             AnyExploreCrew::Small(c) => c.local_map(),
             AnyExploreCrew::Large(c) => c.local_map(),
+        }
+    }
+
+    /// Links a ground station to the onboard stack.
+    pub fn link_ground(&mut self, station: Box<dyn GroundStation>) {
+        match self {
+            AnyExploreCrew::Small(c) => c.link.link_ground_station(station),
+            AnyExploreCrew::Large(c) => c.link.link_ground_station(station),
         }
     }
 

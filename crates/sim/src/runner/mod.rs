@@ -12,6 +12,7 @@
 
 mod config;
 mod fix_covariance;
+pub mod ground;
 mod lockstep;
 pub mod companion;
 pub mod mission;

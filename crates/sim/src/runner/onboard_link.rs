@@ -6,10 +6,14 @@
 //! ([`WithCompanion`]): it sees each revolution as the stack does and its messages reach the
 //! autopilot in the same step, as a wired link would deliver them between two steps.
 //!
+//! A ground station ([`GroundStation`]) may be linked too: it sees what the vehicle reports after
+//! each step and its messages reach the autopilot at the next one.
+//!
 //! The runner consumes the flight software, so what the stack did (modes, failsafes, its
 //! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
 //! to. The runner never hands the stack ground truth; the log holds only onboard values.
 
+use crate::runner::ground::{GroundStation, VehicleReport};
 use crate::runner::mission::Mission;
 use crate::runner::{FlightSoftware, SensorFrame, SetupError, STATE_RATE_HZ};
 use crate::sensors::lidar::{LidarProfile, LidarScan};
@@ -17,11 +21,12 @@ use crate::vehicle::{Frame, VehicleParams};
 use plumbline_core::control::airframe::Airframe;
 use plumbline_core::control::mrac::FallbackReason;
 use plumbline_core::flight::autopilot::AutopilotConfig;
+use plumbline_core::flight::events::Event;
 use plumbline_core::flight::onboard::Onboard;
 use plumbline_core::matching::OdometryConfig;
 use plumbline_core::msgs::{
-    CompanionMessages, EstimatedState, FailsafeReason, FlightMode, FrameKind, ImuSample, Inputs,
-    MotorCommands, PilotInput,
+    CompanionMessages, EstimatedState, FailsafeReason, FlightMode, FrameKind, GroundMessages,
+    ImuSample, Inputs, MotorCommands, Outputs, PilotInput,
 };
 use plumbline_core::scan::{Beam, Scan};
 use std::cell::RefCell;
@@ -166,6 +171,18 @@ pub struct OnboardLink<const N: usize> {
     /// Set when the stack first holds: how much later than planned the mission flies.
     mission_shift_s: Option<f64>,
     log: Rc<RefCell<FlightLog>>,
+    ground: Option<GroundLink>,
+}
+
+/// A linked ground station and what is in flight between it and the autopilot.
+struct GroundLink {
+    station: Box<dyn GroundStation>,
+    /// What the ground sent after the previous step, for the next one.
+    uplink: GroundMessages,
+    /// Events of the autopilot's log already reported (its running total).
+    events_seen: u32,
+    /// The new events of one step, reused so a step does not allocate.
+    new_events: Vec<Event>,
 }
 
 impl<const N: usize> OnboardLink<N> {
@@ -192,6 +209,7 @@ impl<const N: usize> OnboardLink<N> {
             next_sample_s: 0.0,
             mission_shift_s: None,
             log: log.clone(),
+            ground: None,
         };
         Ok((link, log))
     }
@@ -257,8 +275,14 @@ impl<const N: usize> OnboardLink<N> {
                 m.setpoint(frame.t_s - shift)
             }),
             companion: messages,
+            ground: self.ground.as_mut().map_or(GroundMessages::default(), |g| {
+                core::mem::take(&mut g.uplink)
+            }),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
+        if let Some(ground) = self.ground.as_mut() {
+            ground.exchange(frame, scan.map(|s| s.beams()), &out, &self.onboard);
+        }
         if let (None, Some(m), FlightMode::Hold) =
             (self.mission_shift_s, &self.script.mission, out.mode)
         {
@@ -301,6 +325,35 @@ impl<const N: usize> OnboardLink<N> {
     }
 }
 
+impl GroundLink {
+    /// Reports the step to the station and keeps its answer for the next step.
+    fn exchange<const N: usize>(
+        &mut self,
+        frame: &SensorFrame<'_>,
+        scan: Option<&[plumbline_core::scan::Beam]>,
+        outputs: &Outputs,
+        onboard: &Onboard<N>,
+    ) {
+        let events = onboard.autopilot().events();
+        let new = events.total().wrapping_sub(self.events_seen);
+        self.events_seen = events.total();
+        self.new_events.clear();
+        let kept = events.iter().count();
+        self.new_events
+            .extend(events.iter().skip(kept.saturating_sub(new as usize)));
+        let report = VehicleReport {
+            t_s: frame.t_s,
+            outputs,
+            battery: frame.battery,
+            sonar: frame.sonar,
+            scan,
+            events: &self.new_events,
+            events_missed: new.saturating_sub(self.new_events.len() as u32),
+        };
+        self.uplink = self.station.exchange(&report);
+    }
+}
+
 impl<const N: usize> FlightSoftware for OnboardLink<N> {
     fn rate_hz(&self) -> f64 {
         ONBOARD_RATE_HZ
@@ -308,6 +361,26 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
 
     fn step(&mut self, frame: &SensorFrame<'_>, dt_s: f64) -> MotorCommands {
         self.step_with(frame, dt_s, None)
+    }
+
+    fn link_ground(
+        &mut self,
+        station: Box<dyn GroundStation>,
+    ) -> Result<(), Box<dyn GroundStation>> {
+        self.link_ground_station(station);
+        Ok(())
+    }
+}
+
+impl<const N: usize> OnboardLink<N> {
+    /// Links `station` to the stack from the next step on (replacing any linked before).
+    pub fn link_ground_station(&mut self, station: Box<dyn GroundStation>) {
+        self.ground = Some(GroundLink {
+            station,
+            uplink: GroundMessages::default(),
+            events_seen: self.onboard.autopilot().events().total(),
+            new_events: Vec::new(),
+        });
     }
 }
 
@@ -324,6 +397,14 @@ impl<const N: usize> FlightSoftware for WithCompanion<'_, N> {
 
     fn step(&mut self, frame: &SensorFrame<'_>, dt_s: f64) -> MotorCommands {
         self.link.step_with(frame, dt_s, Some(&mut *self.companion))
+    }
+
+    fn link_ground(
+        &mut self,
+        station: Box<dyn GroundStation>,
+    ) -> Result<(), Box<dyn GroundStation>> {
+        self.link.link_ground_station(station);
+        Ok(())
     }
 }
 

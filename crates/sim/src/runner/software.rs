@@ -1,6 +1,7 @@
 //! Who flies: the test pilot on a plan, or onboard software behind the one step interface the
 //! hardware has too.
 
+use crate::runner::ground::GroundStation;
 use crate::runner::plan::Plan;
 use crate::sensors::lidar::LidarScan;
 use plumbline_core::msgs::{BatterySample, ImuSample, MotorCommands, SonarSample};
@@ -20,6 +21,15 @@ pub struct SensorFrame<'a> {
 pub trait FlightSoftware {
     fn rate_hz(&self) -> f64;
     fn step(&mut self, sensors: &SensorFrame<'_>, dt_s: f64) -> MotorCommands;
+
+    /// Links a ground station from the next step on; software without a ground link hands
+    /// it back.
+    fn link_ground(
+        &mut self,
+        station: Box<dyn GroundStation>,
+    ) -> Result<(), Box<dyn GroundStation>> {
+        Err(station)
+    }
 }
 
 /// Who flies; `'a` bounds what the onboard software may borrow (a companion's SLAM borrows

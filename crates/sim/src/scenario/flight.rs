@@ -7,6 +7,7 @@ use super::score::{self, Judge, Score};
 use super::track::TrackShape;
 use crate::disturb::Push;
 use crate::runner::companion::{AnyExploreCrew, CompanionLog, Strategy};
+use crate::runner::ground::GroundStation;
 use crate::runner::mission::Mission;
 use crate::runner::onboard_link::FlightLog;
 use crate::runner::plan::Plan;
@@ -239,6 +240,24 @@ impl Flight {
                 explorer,
             },
             planned_s: config.max_duration_s,
+        }
+    }
+}
+
+impl Flight {
+    /// Links a ground station to the onboard stack; the test pilot has no ground link and
+    /// hands it back.
+    pub fn link_ground(
+        &mut self,
+        station: Box<dyn GroundStation>,
+    ) -> Result<(), Box<dyn GroundStation>> {
+        match &mut self.crew {
+            Crew::Ready(Pilot::Onboard(software)) => software.link_ground(station),
+            Crew::Ready(Pilot::Test(_)) => Err(station),
+            Crew::Explore(crew) => {
+                crew.link_ground(station);
+                Ok(())
+            }
         }
     }
 }
