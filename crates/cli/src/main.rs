@@ -12,6 +12,7 @@ mod report;
 mod sim;
 mod slam_cmd;
 mod study;
+mod view_args;
 
 #[derive(Parser)]
 #[command(

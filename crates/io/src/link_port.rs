@@ -52,11 +52,10 @@ impl Endpoint {
                 }
             }
             "serial" => {
-                let baud: u32 = tail
-                    .parse()
-                    .ok()
-                    .filter(|b| *b > 0)
-                    .ok_or_else(|| format!("`{text}`: baud `{tail}` is not a positive number"))?;
+                let baud: u32 =
+                    tail.parse().ok().filter(|b| *b > 0).ok_or_else(|| {
+                        format!("`{text}`: baud `{tail}` is not a positive number")
+                    })?;
                 if head.is_empty() {
                     return Err(format!("`{text}`: no device"));
                 }

@@ -62,6 +62,7 @@ fn failsafe_name(f: FailsafeReason) -> &'static str {
         FailsafeReason::BatteryCritical => "battery critical",
         FailsafeReason::KillSwitch => "kill switch",
         FailsafeReason::CompanionLost => "companion lost",
+        FailsafeReason::LinkLost => "ground link lost",
     }
 }
 

@@ -16,9 +16,11 @@ mod clients;
 mod command;
 mod encode;
 mod page;
+mod scan_map;
 mod snapshot;
 mod stats;
 
+pub use scan_map::{scan_points, ScanMap};
 pub use snapshot::{OccupancyImage, Snapshot, FREE, OCCUPIED, UNKNOWN};
 pub use stats::ViewStats;
 
