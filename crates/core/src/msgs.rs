@@ -207,7 +207,8 @@ pub enum FlightMode {
     Land,
     /// Pilot sticks with rate damping.
     Manual,
-    /// Kill switch: motors stopped until the switch is released and the vehicle re-armed.
+    /// Kill switch or a ground terminate: motors stopped until the switch is released (or the
+    /// ground station disarms) and the vehicle re-armed.
     Killed,
 }
 
@@ -421,6 +422,8 @@ pub enum Refusal {
     Killed,
     /// A manual takeover needs recent sticks from the ground station first.
     NoSticks,
+    /// The step that received it could not run (a bad time step): send it again.
+    StepNotRun,
 }
 
 /// Stick positions from a ground station (MANUAL_CONTROL), normalised like [`PilotInput`]'s.

@@ -17,8 +17,9 @@ use crate::estimate::ekf::Outcome;
 use crate::estimate::estimator::{Estimator, EstimatorCounters, Situation};
 use crate::estimate::pose_fix::CompanionFrame;
 use crate::msgs::{
-    EstimatedState, FailsafeReason, FlightMode, Inputs, MissionSetpoint, MotorCommands, Outputs,
-    PilotInput, PositionSetpoint, ScanMatchStatus,
+    CommandResult, EstimatedState, FailsafeReason, FlightMode, GroundAck, GroundCommand, Inputs,
+    MissionSetpoint, MotorCommands, Outputs, PilotInput, PositionSetpoint, Refusal,
+    ScanMatchStatus,
 };
 
 pub use super::autopilot_config::{AutopilotConfig, ControllerKind, LandingConfig};
@@ -135,10 +136,21 @@ impl Autopilot {
         // Plain comparisons (a NaN fails them): `is_finite` is several integer operations.
         if !(dt > 0.0 && dt <= self.config.landing.max_dt_s && dt < f32::INFINITY) {
             self.faults.bad_dt = self.faults.bad_dt.saturating_add(1);
-            if pilot.kill {
+            let command = inputs.ground.command;
+            if command == Some(GroundCommand::Terminate) {
+                self.supervisor.terminate();
+            }
+            if pilot.kill || self.supervisor.terminated() {
                 self.last.motors = MotorCommands::STOPPED;
                 self.last.mode = FlightMode::Killed;
             }
+            self.last.ground_ack = command.map(|command| GroundAck {
+                command,
+                result: match command {
+                    GroundCommand::Terminate => CommandResult::Accepted,
+                    _ => CommandResult::Refused(Refusal::StepNotRun),
+                },
+            });
             return self.last;
         }
         let battery_v = match inputs.battery.map(|b| b.voltage_v) {
@@ -196,7 +208,7 @@ impl Autopilot {
         }
         let home_xy = self.mission.home(self.takeoff_xy, &frame);
         let c = &self.config;
-        let landing_s = c.supervisor.takeoff_height_m / c.landing.descent_m_s;
+        let landing_s = self.supervisor.hold_height_m() / c.landing.descent_m_s;
         let here_xy = [estimate.position_m[0], estimate.position_m[1]];
         let mission = self.mission.status(inputs.t_s, here_xy, home_xy, landing_s);
         let status = Status {
@@ -207,6 +219,7 @@ impl Autopilot {
             battery_v,
             low_thrust: self.low_thrust,
             mission,
+            ground: inputs.ground,
         };
         let mode = self.supervisor.update(&status);
         if mode != self.mode {
@@ -214,7 +227,16 @@ impl Autopilot {
             let land_xy = if mission.at_home { home_xy } else { here_xy };
             self.enter(mode, &estimate, inputs.t_s, land_xy);
         }
+        let ground_ack = self.supervisor.ack();
+        if let Some(GroundAck {
+            command: GroundCommand::Takeoff { .. },
+            result: CommandResult::Accepted,
+        }) = ground_ack
+        {
+            self.home.position_m[2] = self.supervisor.hold_height_m();
+        }
         let failsafe = self.supervisor.failsafe();
+        let pilot = *self.supervisor.pilot();
 
         // ---- guide: what this mode asks for ----
         let mission = self.follow(mode, inputs.mission);
@@ -270,7 +292,7 @@ impl Autopilot {
             failsafe,
             estimate,
             setpoint: setpoint.map(|sp| self.report(&sp, &estimate)),
-            ground_ack: None,
+            ground_ack,
         };
         self.last
     }
@@ -284,14 +306,19 @@ impl Autopilot {
         };
         match mode {
             FlightMode::Takeoff | FlightMode::Hold => {
-                // Takeoff holds above where it left the ground; a hand-back holds where it is.
-                if mode == FlightMode::Takeoff || self.mode == FlightMode::Manual {
+                // Takeoff holds above where it left the ground; a hand-back, or a mission
+                // stopped by the ground station or the link-lost failsafe, holds where it is.
+                if matches!(
+                    self.mode,
+                    FlightMode::Manual | FlightMode::Explore | FlightMode::Return
+                ) || mode == FlightMode::Takeoff
+                {
                     self.home = here;
                 }
                 if mode == FlightMode::Takeoff {
                     self.takeoff_xy = [here.position_m[0], here.position_m[1]];
                 }
-                self.home.position_m[2] = self.config.supervisor.takeoff_height_m;
+                self.home.position_m[2] = self.supervisor.hold_height_m();
             }
             FlightMode::Land if matches!(self.mode, FlightMode::Explore | FlightMode::Return) => {
                 self.home.position_m[0] = land_xy[0];

@@ -123,6 +123,8 @@ pub struct MissionStatus {
     pub companion_silent: bool,
     /// Within `home_tolerance_m` of the take-off point.
     pub at_home: bool,
+    /// The companion has sent something within `companion_lost_s`: a mission can be flown.
+    pub companion_present: bool,
 }
 
 /// Companion inputs that were refused, and the steps spent holding for want of a setpoint.
@@ -151,6 +153,8 @@ pub struct Mission {
     voltage_v: Option<f32>,
     /// The take-off point in the companion's map frame, once the map is anchored.
     home_map: Option<[f32; 2]>,
+    /// When the companion last sent anything.
+    heard_t_s: Option<f64>,
     counters: MissionCounters,
 }
 
@@ -168,6 +172,13 @@ impl Mission {
 
     /// Takes in what arrived at `t_s`; `battery_v` is a finite reading or `None`.
     pub fn observe(&mut self, t_s: f64, m: &CompanionMessages, battery_v: Option<f32>, dt: f32) {
+        if m.pose.is_some()
+            || m.setpoint.is_some()
+            || m.command.is_some()
+            || m.path_home_m.is_some()
+        {
+            self.heard_t_s = Some(t_s);
+        }
         match m.command {
             Some(MissionCommand::StartExplore) => self.start_requested = true,
             Some(MissionCommand::ExploreDone) => self.done = true,
@@ -206,7 +217,12 @@ impl Mission {
         self.stale_hold = None;
         match mode {
             FlightMode::Explore => self.start_requested = false,
-            FlightMode::Disarmed => *self = Self::new(self.config),
+            FlightMode::Disarmed => {
+                *self = Self {
+                    heard_t_s: self.heard_t_s,
+                    ..Self::new(self.config)
+                }
+            }
             _ => {}
         }
     }
@@ -244,6 +260,9 @@ impl Mission {
             energy: self.energy(landing_s),
             companion_silent: silent_s > c.companion_lost_s,
             at_home: hypotf(here[0] - home[0], here[1] - home[1]) <= c.home_tolerance_m,
+            companion_present: self
+                .heard_t_s
+                .is_some_and(|at| ((t_s - at) as f32) <= c.companion_lost_s),
         }
     }
 

@@ -3,6 +3,7 @@
 pub mod autopilot;
 mod autopilot_config;
 pub mod events;
+pub mod ground;
 pub mod mission;
 pub mod onboard;
 pub mod supervisor;
@@ -12,3 +13,5 @@ mod test_vehicle;
 mod mission_tests;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod ground_flight_tests;

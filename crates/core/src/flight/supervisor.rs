@@ -1,15 +1,20 @@
 //! Modes and failsafes: which mode the vehicle is in and why, decided from the pilot's switches,
-//! the estimate, the scan matcher's health and the battery.
+//! the ground station's commands, the estimate, the scan matcher's health and the battery.
 //!
 //! disarmed -> takeoff -> hold -> land -> disarmed, or on a mission takeoff -> hold -> explore
 //! -> return -> land ([`super::mission`]), with manual (stick) flight reachable from any
 //! flying mode through the takeover switch and the kill switch overriding everything (seed 002
 //! sec. III). Failsafes only override the autonomous modes; a safety pilot in manual stays in
-//! charge. Every mode change and failsafe goes to the event log.
+//! charge. Every mode change and failsafe goes to the event log. How the ground station's
+//! commands and the radio share the switches is in [`super::ground`]; what each command does
+//! in each mode is in `ground_commands.rs`.
 
 use super::events::{EventKind, EventLog};
+use super::ground::{GroundLink, GroundLinkConfig};
 use super::mission::{self, MissionStatus};
-use crate::msgs::{EstimatedState, FailsafeReason, FlightMode, PilotInput};
+use crate::msgs::{
+    EstimatedState, FailsafeReason, FlightMode, GroundAck, GroundMessages, PilotInput, Refusal,
+};
 
 /// Failsafe thresholds and mode-transition tolerances.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,6 +43,8 @@ pub struct SupervisorConfig {
     /// the floor is holding the vehicle up, whatever the estimate says (an IMU that aliased
     /// the touchdown shock can leave the filter believing it still moves).
     pub low_thrust_s: f32,
+    /// The ground-station link: its loss, and the bounds of its commands.
+    pub link: GroundLinkConfig,
 }
 
 impl Default for SupervisorConfig {
@@ -54,6 +61,7 @@ impl Default for SupervisorConfig {
             touchdown_speed_m_s: 0.2,
             touchdown_s: 0.5,
             low_thrust_s: 1.0,
+            link: GroundLinkConfig::default(),
         }
     }
 }
@@ -72,6 +80,8 @@ pub struct Status {
     pub low_thrust: bool,
     /// The exploration mission's facts (all false without a companion).
     pub mission: MissionStatus,
+    /// What the ground station sent this step.
+    pub ground: GroundMessages,
 }
 
 /// Capacity of the event log.
@@ -93,6 +103,15 @@ pub struct Supervisor {
     touchdown_since_t_s: Option<f64>,
     low_thrust_since_t_s: Option<f64>,
     events: EventLog<EVENT_LOG_LEN>,
+    link: GroundLink,
+    /// The switches and sticks this step was decided on (the radio's merged with the ground's).
+    pilot: PilotInput,
+    /// The answer to this step's ground command.
+    ack: Option<GroundAck>,
+    /// Height (m) of the take-off and hold above the take-off floor for this flight.
+    hold_height_m: f32,
+    /// A take-off height a ground command asked for, taken up at the arming it causes.
+    takeoff_height_request_m: Option<f32>,
 }
 
 impl Supervisor {
@@ -110,6 +129,11 @@ impl Supervisor {
             touchdown_since_t_s: None,
             low_thrust_since_t_s: None,
             events: EventLog::default(),
+            link: GroundLink::new(config.link),
+            pilot: PilotInput::default(),
+            ack: None,
+            hold_height_m: config.takeoff_height_m,
+            takeoff_height_request_m: None,
         }
     }
 
@@ -126,6 +150,31 @@ impl Supervisor {
         &self.events
     }
 
+    /// The switches and sticks the last step flew on: the radio's, merged with the ground's.
+    pub fn pilot(&self) -> &PilotInput {
+        &self.pilot
+    }
+
+    /// The answer to the last step's ground command.
+    pub fn ack(&self) -> Option<GroundAck> {
+        self.ack
+    }
+
+    /// Take-off and hold height (m) of this flight.
+    pub fn hold_height_m(&self) -> f32 {
+        self.hold_height_m
+    }
+
+    /// SAFETY-CRITICAL: a ground terminate, latched even on a step that cannot run.
+    pub fn terminate(&mut self) {
+        self.link.terminate();
+    }
+
+    /// The ground's terminate is latched.
+    pub fn terminated(&self) -> bool {
+        self.link.terminated()
+    }
+
     /// Logs what another part of the autopilot reports (the controller's fallbacks), beside
     /// the mode changes and failsafes.
     pub fn record(&mut self, t_s: f64, kind: EventKind) {
@@ -134,35 +183,57 @@ impl Supervisor {
 
     /// One decision. Returns the mode to fly this step.
     pub fn update(&mut self, s: &Status) -> FlightMode {
+        self.link.observe(s.t_s, &s.pilot, &s.ground);
+        let command = s.ground.command;
+        self.ack = command.and_then(|c| self.kill_command(c));
+        self.watch_ground_manual(s.t_s);
+        let mut pilot = self.link.switches(&s.pilot);
+        self.pilot = pilot;
         // SAFETY-CRITICAL: the kill switch wins over every other input and every mode.
-        if s.pilot.kill {
+        if pilot.kill {
             if self.mode != FlightMode::Killed {
                 self.raise(s.t_s, FailsafeReason::KillSwitch);
                 self.set_mode(s.t_s, FlightMode::Killed);
             }
+            self.refuse_unanswered(command, Refusal::Killed);
             return self.mode;
         }
         // SAFETY-CRITICAL: leaving "killed" needs the arm switch off, then a fresh arming.
         if self.mode == FlightMode::Killed {
-            if s.pilot.arm {
+            if pilot.arm {
+                self.refuse_unanswered(command, Refusal::Killed);
                 return self.mode;
             }
             self.set_mode(s.t_s, FlightMode::Disarmed);
         }
-        if !s.pilot.arm {
+        if !pilot.arm {
             self.arm_seen_off = true;
         }
         if s.scan_accepted {
             self.last_scan_t_s = s.t_s;
         }
         self.track_battery(s);
+        if self.mode == FlightMode::Disarmed {
+            self.link.forget_if_lost(s.t_s);
+        }
+        if let Some(c) = command.filter(|_| self.ack.is_none()) {
+            let before = self.mode;
+            let result = self.command(c, s);
+            self.ack = Some(GroundAck { command: c, result });
+            pilot = self.link.switches(&s.pilot);
+            self.pilot = pilot;
+            if self.mode != before {
+                // The commanded mode flies from this step; its checks start with the next.
+                return self.mode;
+            }
+        }
 
         match self.mode {
-            FlightMode::Disarmed => self.maybe_arm(s),
+            FlightMode::Disarmed => self.maybe_arm(s, &pilot),
             FlightMode::Manual => {
-                if !s.pilot.arm {
+                if !pilot.arm {
                     self.set_mode(s.t_s, FlightMode::Land);
-                } else if !s.pilot.manual {
+                } else if !pilot.manual {
                     let next = if s.estimate.valid {
                         FlightMode::Hold
                     } else {
@@ -172,13 +243,15 @@ impl Supervisor {
                 }
             }
             FlightMode::Takeoff | FlightMode::Hold | FlightMode::Explore | FlightMode::Return => {
-                if s.pilot.manual {
+                if pilot.manual {
                     self.set_mode(s.t_s, FlightMode::Manual);
-                } else if self.autonomous_failsafes(s) || !s.pilot.arm {
+                } else if self.autonomous_failsafes(s) || !pilot.arm {
                     self.set_mode(s.t_s, FlightMode::Land);
+                } else if let Some(next) = self.link_lost(s.t_s) {
+                    self.set_mode(s.t_s, next);
                 } else if self.mode == FlightMode::Takeoff
                     && s.estimate.position_m[2]
-                        >= self.config.takeoff_height_m - self.config.takeoff_tolerance_m
+                        >= self.hold_height_m - self.config.takeoff_tolerance_m
                 {
                     self.set_mode(s.t_s, FlightMode::Hold);
                 } else if let Some((next, reason)) =
@@ -191,7 +264,7 @@ impl Supervisor {
                 }
             }
             FlightMode::Land => {
-                if s.pilot.manual && s.pilot.arm {
+                if pilot.manual && pilot.arm {
                     self.set_mode(s.t_s, FlightMode::Manual);
                 } else {
                     self.landing_checks(s);
@@ -202,12 +275,12 @@ impl Supervisor {
         self.mode
     }
 
-    fn maybe_arm(&mut self, s: &Status) {
-        let ready = s.pilot.arm && self.arm_seen_off && !self.battery_critical;
+    fn maybe_arm(&mut self, s: &Status, pilot: &PilotInput) {
+        let ready = pilot.arm && self.arm_seen_off && !self.battery_critical;
         if !ready {
             return;
         }
-        let next = if s.pilot.manual {
+        let next = if pilot.manual {
             FlightMode::Manual
         } else if s.estimate.valid {
             FlightMode::Takeoff
@@ -216,6 +289,8 @@ impl Supervisor {
         };
         self.arm_seen_off = false;
         self.failsafe = None;
+        self.hold_height_m =
+            (self.takeoff_height_request_m.take()).unwrap_or(self.config.takeoff_height_m);
         // The lidar gets a full timeout from arming to report.
         self.last_scan_t_s = s.t_s;
         self.set_mode(s.t_s, next);
@@ -250,6 +325,38 @@ impl Supervisor {
         false
     }
 
+    /// The link-lost failsafe of the autonomous modes: hold, then land after
+    /// `link_lost_land_s`; it clears when the heartbeats return (the vehicle keeps holding).
+    fn link_lost(&mut self, t_s: f64) -> Option<FlightMode> {
+        let Some(lost_s) = self.link.lost_for_s(t_s) else {
+            if self.failsafe == Some(FailsafeReason::LinkLost) {
+                self.failsafe = None;
+            }
+            return None;
+        };
+        // Another failsafe in force keeps its name (two alternating would flood the log).
+        if self.failsafe.is_none() {
+            self.raise(t_s, FailsafeReason::LinkLost);
+        }
+        Some(if lost_s > self.link.config.link_lost_land_s {
+            FlightMode::Land
+        } else {
+            FlightMode::Hold
+        })
+    }
+
+    /// A manual flight on the ground's sticks ends when they stop or the link is lost: the
+    /// manual mode's hand-back then holds (or lands without a trustworthy estimate).
+    fn watch_ground_manual(&mut self, t_s: f64) {
+        let flying_ground_sticks = self.mode == FlightMode::Manual && self.link.ground_manual();
+        if flying_ground_sticks
+            && (self.link.lost_for_s(t_s).is_some() || !self.link.sticks_fresh(t_s))
+        {
+            self.raise(t_s, FailsafeReason::LinkLost);
+            self.link.set_manual(false);
+        }
+    }
+
     fn landing_checks(&mut self, s: &Status) {
         if self.battery_critical {
             self.raise(s.t_s, FailsafeReason::BatteryCritical);
@@ -272,6 +379,8 @@ impl Supervisor {
         if landed {
             self.touchdown_since_t_s = None;
             self.low_thrust_since_t_s = None;
+            // Down: the arm latch is the radio's switch again (a ground-armed flight is over).
+            self.link.follow_radio_arm();
             self.set_mode(s.t_s, FlightMode::Disarmed);
         }
     }
@@ -327,6 +436,8 @@ fn held_for(since: &mut Option<f64>, condition: bool, t_s: f64, secs: f32) -> bo
     (t_s - *since.get_or_insert(t_s)) as f32 >= secs
 }
 
+#[path = "ground_commands.rs"]
+mod ground_commands;
 #[cfg(test)]
 #[path = "supervisor_tests.rs"]
 mod tests;

@@ -1,6 +1,7 @@
 //! Tests of [`super`], kept apart so the module itself stays short.
 
 use super::*;
+use crate::msgs::{CommandResult, GroundCommand};
 
 /// Drives a supervisor with a scripted world: a height, a battery, a lidar that can stop.
 struct Script {
@@ -12,6 +13,12 @@ struct Script {
     lidar: bool,
     battery_v: f32,
     low_thrust: bool,
+    /// A ground heartbeat arrives every step while true.
+    heartbeat: bool,
+    /// Sent with the next step only.
+    command: Option<GroundCommand>,
+    /// A companion computer is talking.
+    companion: bool,
 }
 
 impl Script {
@@ -25,6 +32,9 @@ impl Script {
             lidar: true,
             battery_v: 12.0,
             low_thrust: false,
+            heartbeat: false,
+            command: None,
+            companion: false,
         }
     }
 
@@ -46,10 +56,30 @@ impl Script {
                 scan_accepted: self.lidar && tick.is_multiple_of(20),
                 battery_v: Some(self.battery_v),
                 low_thrust: self.low_thrust,
-                mission: MissionStatus::default(),
+                mission: MissionStatus {
+                    companion_present: self.companion,
+                    ..MissionStatus::default()
+                },
+                ground: GroundMessages {
+                    command: self.command.take(),
+                    heartbeat: self.heartbeat,
+                },
             });
         }
         self.sup.mode()
+    }
+
+    /// Sends `c` in one step and returns the answer.
+    fn send(&mut self, c: GroundCommand) -> CommandResult {
+        self.command = Some(c);
+        self.run(0.01);
+        let ack = self.sup.ack().expect("every command is answered");
+        // Compared by kind: a command carrying a NaN is not equal to itself.
+        assert_eq!(
+            core::mem::discriminant(&ack.command),
+            core::mem::discriminant(&c)
+        );
+        ack.result
     }
 
     fn climb_to_hold(&mut self) {
@@ -190,3 +220,6 @@ fn manual_takeover_and_hand_back() {
     s.pilot.manual = false;
     assert_eq!(s.run(0.01), FlightMode::Hold);
 }
+
+#[path = "ground_tests.rs"]
+mod ground;

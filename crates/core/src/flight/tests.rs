@@ -7,8 +7,8 @@ use super::test_vehicle::{TestVehicle, AIRFRAME};
 use crate::msgs::{FailsafeReason, FlightMode, Inputs, Outputs};
 use libm::hypotf;
 
-const HZ: u64 = 500;
-const DT: f32 = 1.0 / HZ as f32;
+pub(super) const HZ: u64 = 500;
+pub(super) const DT: f32 = 1.0 / HZ as f32;
 
 pub(super) fn config() -> AutopilotConfig {
     AutopilotConfig::for_airframe(&AIRFRAME)
