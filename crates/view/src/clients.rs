@@ -10,9 +10,9 @@ use crate::encode;
 use crate::page::INDEX_HTML;
 use crate::snapshot::Snapshot;
 use crate::stats::Counters;
+use crate::ticker::{Frame, Ticker};
 use crate::ViewConfig;
-use axum::body::Bytes;
-use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{DefaultBodyLimit, State};
 use axum::http::{header, HeaderMap, StatusCode};
 use axum::response::{Html, IntoResponse, Response};
@@ -21,41 +21,28 @@ use axum::Router;
 use plumbline_core::msgs::GroundCommand;
 use std::sync::mpsc::SyncSender;
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use tokio::sync::{oneshot, watch};
-use tokio::time::{interval, timeout, MissedTickBehavior};
+use tokio::time::timeout;
 
 /// A trail point is added once the vehicle has moved this far from the last one, m.
 const TRAIL_STEP_M: f32 = 0.05;
 /// The trail keeps at most this many points; when full, every other point is dropped, so the
 /// whole flight stays on the page at a coarser spacing.
 const TRAIL_POINTS: usize = 4000;
+/// How long the last frame is given to reach the clients when the view stops.
+const FINAL_FLUSH: Duration = Duration::from_millis(300);
 /// Longest command body taken, bytes: the longest command name with room for a newline.
 const COMMAND_BODY_LIMIT: usize = 64;
 
-/// The map as sent: its version, geometry message and PNG.
-struct EncodedMap {
-    version: u64,
-    meta: Utf8Bytes,
-    png: Bytes,
-}
-
-/// What the ticker hands every client: the state message and the newest map.
-#[derive(Default)]
-struct Frame {
-    seq: u64,
-    state: Utf8Bytes,
-    map: Option<Arc<EncodedMap>>,
-}
-
 /// The flight's path so far as flat x, y pairs, thinned as described at [`TRAIL_POINTS`].
 #[derive(Default)]
-struct Trail {
+pub(crate) struct Trail {
     points_m: Vec<f32>,
 }
 
 impl Trail {
-    fn push(&mut self, x: f32, y: f32) {
+    pub fn push(&mut self, x: f32, y: f32) {
         if !(x.is_finite() && y.is_finite()) {
             return;
         }
@@ -77,10 +64,10 @@ impl Trail {
 }
 
 /// What every request handler and client task shares.
-struct Shared {
+pub(crate) struct Shared {
     token: Option<String>,
     frames: watch::Receiver<Arc<Frame>>,
-    trail: Mutex<Trail>,
+    pub trail: Mutex<Trail>,
     commands: SyncSender<GroundCommand>,
     counters: Arc<Counters>,
     send_timeout: Duration,
@@ -121,67 +108,24 @@ impl Server {
             counters: self.counters,
             send_timeout: self.config.send_timeout,
         });
-        let ticker = tick(self.snapshots, frames_tx, shared.clone(), &self.config);
+        let mut ticker = Ticker::new(self.snapshots, frames_tx, shared.clone(), &self.config);
         let app = Router::new()
             .route("/", get(index))
             .route("/ws", get(upgrade))
             .route("/command", post(command))
             .route("/stats", get(stats))
             .layer(DefaultBodyLimit::max(COMMAND_BODY_LIMIT))
-            .with_state(shared);
+            .with_state(shared.clone());
         tokio::select! {
             _ = axum::serve(listener, app) => {}
-            _ = ticker => {}
+            _ = ticker.run() => {}
             _ = stop => {}
         }
-    }
-}
-
-/// Turns the newest snapshot into a frame at the frame rate, and the map into a PNG when it
-/// changed, at most at the map rate.
-async fn tick(
-    mut snapshots: watch::Receiver<Arc<Snapshot>>,
-    frames: watch::Sender<Arc<Frame>>,
-    shared: Arc<Shared>,
-    config: &ViewConfig,
-) {
-    let mut every = interval(Duration::from_secs_f64(1.0 / config.frame_hz));
-    every.set_missed_tick_behavior(MissedTickBehavior::Skip);
-    let map_every = Duration::from_secs_f64(1.0 / config.map_hz);
-    let mut map: Option<Arc<EncodedMap>> = None;
-    let mut map_at: Option<Instant> = None;
-    let mut seq = 0;
-    loop {
-        every.tick().await;
-        match snapshots.has_changed() {
-            Ok(true) => {}
-            Ok(false) => continue,
-            Err(_) => return,
+        // The flight is over: its last state and map go out before the clients are closed.
+        ticker.frame(true);
+        if shared.counters.read().clients_open() > 0 {
+            tokio::time::sleep(FINAL_FLUSH.min(shared.send_timeout)).await;
         }
-        let snap = snapshots.borrow_and_update().clone();
-        seq += 1;
-        if let Ok(mut trail) = shared.trail.lock() {
-            trail.push(snap.pose[0] as f32, snap.pose[1] as f32);
-        }
-        let due = map_at.is_none_or(|t| t.elapsed() >= map_every);
-        let newer = |m: &Arc<EncodedMap>, v| m.version != v;
-        if let Some(image) = snap.map.as_deref().filter(|_| due) {
-            if map.as_ref().is_none_or(|m| newer(m, image.version)) {
-                if let Some((meta, png)) = encode::map(image) {
-                    map = Some(Arc::new(EncodedMap {
-                        version: image.version,
-                        meta: meta.into(),
-                        png: png.into(),
-                    }));
-                    map_at = Some(Instant::now());
-                }
-            }
-        }
-        frames.send_replace(Arc::new(Frame {
-            seq,
-            state: encode::state(seq, &snap).into(),
-            map: map.clone(),
-        }));
     }
 }
 

@@ -19,6 +19,7 @@ mod page;
 mod scan_map;
 mod snapshot;
 mod stats;
+mod ticker;
 
 pub use scan_map::{scan_points, ScanMap};
 pub use snapshot::{OccupancyImage, Snapshot, FREE, OCCUPIED, UNKNOWN};

@@ -43,6 +43,14 @@ impl Counters {
     }
 }
 
+impl ViewStats {
+    /// Clients still connected.
+    pub fn clients_open(&self) -> u64 {
+        self.clients_connected
+            .saturating_sub(self.clients_dropped_slow + self.clients_disconnected)
+    }
+}
+
 /// What the view has done since it started.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ViewStats {

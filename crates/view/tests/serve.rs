@@ -244,3 +244,24 @@ fn a_client_that_never_reads_is_dropped_and_the_others_go_on() {
     drop(view);
     reading.join().unwrap();
 }
+
+#[test]
+fn the_last_state_reaches_the_clients_when_the_view_stops() {
+    let view = start(None);
+    let mut ws = connect(view.local_addr());
+    assert_eq!(next_text(&mut ws)["type"], "hello");
+    view.publish(snapshot(1.0, None));
+    assert_eq!(next_text(&mut ws)["t_s"], 1.0);
+    let mut last = snapshot(2.0, None);
+    last.mode = FlightMode::Killed;
+    view.publish(last);
+    drop(view);
+    let mut seen = Vec::new();
+    while let Ok(m) = ws.read() {
+        if let Message::Text(t) = m {
+            let v: serde_json::Value = serde_json::from_str(&t).unwrap();
+            seen.push(v["mode"].as_str().unwrap_or_default().to_string());
+        }
+    }
+    assert_eq!(seen.last().map(String::as_str), Some("Killed"), "{seen:?}");
+}
