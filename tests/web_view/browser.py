@@ -42,7 +42,7 @@ CHROMIUM_FLAGS = [
 # A long hold: the flight outlasts the test, which ends it (or the kill does).
 SIM_ARGS = ["sim", "--scenario", "hold", "--world", "office", "--duration", "3000", "--seed", "3", "--json"]
 SCREENSHOT_ARGS = ["sim", "--scenario", "explore", "--world", "room", "--seed", "1", "--json"]
-SCREENSHOT_AT_S = 70.0
+SCREENSHOT_AT_S = 35.0
 WAIT_S = 60.0
 
 
