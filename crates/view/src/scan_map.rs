@@ -74,22 +74,24 @@ impl ScanMap {
         if !pose.iter().all(|v| v.is_finite()) {
             return;
         }
-        let step = self.image.resolution_m;
+        let m = &self.image;
+        let step = m.resolution_m;
         // No beam crosses more of the map than its diagonal: longer ones are walked that far.
-        let longest = step * (self.image.width + self.image.height) as f64;
+        let longest = step * (m.width + m.height) as f64;
+        // The pose in cell units, so the walk below is one multiply-add per cell.
+        let ox = (pose[0] - m.origin_m[0]) / step;
+        let oy = (pose[1] - m.origin_m[1]) / step;
+        let (w, h) = (m.width as f64, m.height as f64);
         let mut changed = false;
         for beam in beams.iter().filter(|b| b.valid && b.range_m.is_finite()) {
             let end = beam_end(pose, beam);
-            let range = f64::from(beam.range_m);
-            let walked = range.min(longest);
-            let n = (walked / step) as usize;
+            let a = pose[2] + f64::from(beam.angle_rad);
+            let (dx, dy) = (a.cos(), a.sin());
+            let n = (f64::from(beam.range_m).min(longest) / step) as usize;
             for k in 0..n {
-                let f = k as f64 / n as f64 * walked / range;
-                let p = [
-                    pose[0] + f * (end[0] - pose[0]),
-                    pose[1] + f * (end[1] - pose[1]),
-                ];
-                if let Some(i) = self.cell(p) {
+                let (cx, cy) = (ox + k as f64 * dx, oy + k as f64 * dy);
+                if cx >= 0.0 && cy >= 0.0 && cx < w && cy < h {
+                    let i = cy as usize * self.image.width + cx as usize;
                     if self.image.cells[i] == UNKNOWN {
                         self.image.cells[i] = FREE;
                         changed = true;

@@ -12,9 +12,11 @@ use plumbline_sim::world::World;
 use plumbline_view::{scan_points, OccupancyImage, ScanMap, Snapshot, View, MAX_FRAME_HZ};
 use std::rc::Rc;
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
-/// How often the map image is refreshed, s of simulated time.
-const MAP_PERIOD_S: f64 = 0.5;
+/// How often the map image is copied for the view, wall-clock time: the view sends maps no
+/// faster, and a run faster than real time would otherwise copy it hundreds of times a second.
+const MAP_PERIOD: Duration = Duration::from_millis(500);
 /// Room around the world's walls in the map, m.
 const MAP_MARGIN_M: f64 = 2.0;
 
@@ -24,7 +26,7 @@ pub struct ViewStation {
     map_image: Option<Arc<OccupancyImage>>,
     scan_m: Vec<[f32; 2]>,
     next_frame_s: f64,
-    next_map_s: f64,
+    map_at: Option<Instant>,
 }
 
 impl ViewStation {
@@ -42,7 +44,7 @@ impl ViewStation {
             map_image: None,
             scan_m: Vec::new(),
             next_frame_s: 0.0,
-            next_map_s: 0.0,
+            map_at: None,
         }
     }
 }
@@ -59,8 +61,8 @@ impl GroundStation for ViewStation {
         }
         if report.t_s >= self.next_frame_s {
             self.next_frame_s = report.t_s + 1.0 / MAX_FRAME_HZ;
-            if report.t_s >= self.next_map_s {
-                self.next_map_s = report.t_s + MAP_PERIOD_S;
+            if self.map_at.is_none_or(|t| t.elapsed() >= MAP_PERIOD) {
+                self.map_at = Some(Instant::now());
                 self.map_image = Some(self.map.image());
             }
             self.view.publish(Snapshot {
