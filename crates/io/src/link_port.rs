@@ -69,6 +69,17 @@ impl Endpoint {
     }
 }
 
+impl std::fmt::Display for Endpoint {
+    /// The endpoint as it is written on the command line.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Endpoint::UdpOut(a) => write!(f, "udpout:{}:{}", a.ip(), a.port()),
+            Endpoint::UdpIn(a) => write!(f, "udpin:{}:{}", a.ip(), a.port()),
+            Endpoint::Serial { path, baud } => write!(f, "serial:{path}:{baud}"),
+        }
+    }
+}
+
 /// What a port did with the bytes handed to it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PortCounters {
@@ -241,6 +252,13 @@ mod tests {
             Endpoint::parse("udpout:127.0.0.1:14550"),
             Ok(Endpoint::UdpOut(([127, 0, 0, 1], 14550).into()))
         );
+        for text in [
+            "udpout:127.0.0.1:14550",
+            "udpin:0.0.0.0:1",
+            "serial:/dev/ttyS0:115200",
+        ] {
+            assert_eq!(Endpoint::parse(text).unwrap().to_string(), text);
+        }
         assert_eq!(
             Endpoint::parse("udpin:0.0.0.0:14551"),
             Ok(Endpoint::UdpIn(([0, 0, 0, 0], 14551).into()))

@@ -3,9 +3,10 @@
 //! exactly as it is without one.
 
 use plumbline_core::flight::events::EventKind;
+use plumbline_core::flight::params::ParamError;
 use plumbline_core::matching::OdometryConfig;
 use plumbline_core::msgs::{FlightMode, GroundCommand, GroundMessages};
-use plumbline_sim::runner::ground::{GroundStation, VehicleReport};
+use plumbline_sim::runner::ground::{GroundStation, Parameters, VehicleReport};
 use plumbline_sim::runner::onboard_link::{
     autopilot_for, FlightLog, OnboardLink, Script, XV11_BEAMS,
 };
@@ -33,7 +34,7 @@ struct Watcher {
 }
 
 impl GroundStation for Watcher {
-    fn exchange(&mut self, v: &VehicleReport<'_>) -> GroundMessages {
+    fn exchange(&mut self, v: &VehicleReport<'_>, _: &mut Parameters<'_>) -> GroundMessages {
         let mut seen = self.seen.borrow_mut();
         seen.times.push(v.t_s);
         seen.modes.push(v.outputs.mode);
@@ -147,4 +148,53 @@ fn a_kill_from_the_ground_stops_the_motors_at_the_next_step() {
     let motors_after: Vec<_> = log.samples.iter().filter(|s| s.t_s > killed_at).collect();
     assert!(!motors_after.is_empty());
     assert!(motors_after.iter().all(|s| s.motors == [0.0; 4]));
+}
+
+/// A station that sets parameter 0 once in range and once out of it, keeping what it saw.
+struct Tuner {
+    results: Rc<RefCell<Vec<(Option<f32>, Result<f32, ParamError>)>>>,
+}
+
+impl GroundStation for Tuner {
+    fn exchange(&mut self, _: &VehicleReport<'_>, p: &mut Parameters<'_>) -> GroundMessages {
+        let mut results = self.results.borrow_mut();
+        if results.is_empty() {
+            let info = p.info(0).unwrap();
+            let before = p.get(0);
+            let inside = (info.min + info.max) / 2.0;
+            results.push((before, p.set(0, inside)));
+            results.push((p.get(0), p.set(0, info.max * 2.0 + 1.0)));
+            results.push((p.get(0), p.set(0, f32::NAN)));
+            results.push((p.get(0), p.set(p.count(), 1.0)));
+        }
+        GroundMessages::default()
+    }
+}
+
+#[test]
+fn a_station_reads_and_sets_bounded_parameters() {
+    let c = config(1.0);
+    let results = Rc::new(RefCell::new(Vec::new()));
+    let (mut link, _) = OnboardLink::<XV11_BEAMS>::new(
+        &c.lidar,
+        OdometryConfig::default(),
+        autopilot_for(&c.vehicle),
+        Script::default(),
+    )
+    .unwrap();
+    link.link_ground_station(Box::new(Tuner {
+        results: results.clone(),
+    }));
+    run(&c, Pilot::Onboard(Box::new(link)), &mut Discard).unwrap();
+    let r = results.borrow();
+    let inside = r[1].0.unwrap();
+    assert_eq!(r[0].1, Ok(inside), "an in-range value is applied: {r:?}");
+    assert!(
+        matches!(r[1].1, Err(ParamError::OutOfRange { .. })),
+        "{r:?}"
+    );
+    assert_eq!(r[2].1, Err(ParamError::NotFinite));
+    assert_eq!(r[3].1, Err(ParamError::Unknown));
+    // Refused values leave the one in force.
+    assert_eq!((r[2].0, r[3].0), (Some(inside), Some(inside)));
 }

@@ -3,9 +3,12 @@
 //! `plumbline-sim`'s; this command parses, writes files, plots and prints.
 
 mod explore;
+mod ground;
+mod mavlink;
 mod model_error;
 mod onboard;
 mod outputs;
+mod pace;
 pub(crate) mod plot;
 mod view;
 mod world;
@@ -74,6 +77,8 @@ pub struct SimArgs {
     /// (NAME.world, NAME.pgm, NAME.yaml in --out, NAME from the log's file name).
     #[arg(long, value_name = "LOG")]
     pub rasterize: Option<PathBuf>,
+    #[command(flatten)]
+    pub ground: ground::GroundArgs,
     #[command(flatten)]
     pub log_args: LogArgs,
     #[command(flatten)]
@@ -304,12 +309,14 @@ pub fn run(args: SimArgs) -> CliResult {
     if let Some(v) = &view {
         let station = view::ViewStation::new(v.clone(), &config.world);
         flight.link_ground(Box::new(station)).map_err(|_| {
-            CliError(format!(
-                "--view shows the onboard stack; scenario {} is flown by the test pilot",
-                args.scenario
-            ))
+            CliError(
+                "--view needs a scenario flown by the onboard stack; the test pilot has no \
+                 ground link (use --controller pid)"
+                    .into(),
+            )
         })?;
     }
+    let linked = ground::link(&args.ground, &mut flight)?;
     // Every check has passed: from here on the run starts, so the files may be staged.
     let logs = args.out.as_deref().map(SensorLogs::create).transpose()?;
     let bar = progress(flight.planned_s.ceil() as u64, "sim");
@@ -342,6 +349,9 @@ pub fn run(args: SimArgs) -> CliResult {
         if let Some(dir) = args.out.as_deref() {
             explore::plots(dir, &config, exploration, &collector.states)?;
         }
+    }
+    if let Some(stats) = &linked.mavlink {
+        summary["mavlink"] = stats.borrow().summary();
     }
     if let (Some(dir), Some(logs)) = (args.out.as_deref(), collector.logs.take()) {
         let poses = logs.finish(dir)?;

@@ -7,7 +7,7 @@
 //! in its estimate frame (origin and heading at power-up).
 
 use plumbline_core::msgs::GroundMessages;
-use plumbline_sim::runner::ground::{GroundStation, VehicleReport};
+use plumbline_sim::runner::ground::{GroundStation, Parameters, VehicleReport};
 use plumbline_sim::world::World;
 use plumbline_view::{scan_points, OccupancyImage, ScanMap, Snapshot, View, MAX_FRAME_HZ};
 use std::rc::Rc;
@@ -50,7 +50,11 @@ impl ViewStation {
 }
 
 impl GroundStation for ViewStation {
-    fn exchange(&mut self, report: &VehicleReport<'_>) -> GroundMessages {
+    fn exchange(
+        &mut self,
+        report: &VehicleReport<'_>,
+        _parameters: &mut Parameters<'_>,
+    ) -> GroundMessages {
         let e = &report.outputs.estimate;
         let pose = [e.position_m[0], e.position_m[1], e.yaw_rad].map(f64::from);
         if let Some(beams) = report.scan {

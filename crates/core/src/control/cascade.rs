@@ -470,6 +470,9 @@ impl Cascade {
     }
 }
 
+#[path = "cascade_retune.rs"]
+mod retune;
+
 #[cfg(test)]
 mod tests {
     use super::*;

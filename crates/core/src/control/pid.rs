@@ -74,6 +74,16 @@ impl Pid {
         self.rate = 0.0;
     }
 
+    /// New gains and limits, keeping the loop's state. The integral is kept as the output
+    /// contribution it has built up (it is stored already multiplied by `ki`), so a new `ki`
+    /// changes how fast it grows from here, not where it is; a lower `integral_limit` clips it
+    /// at once.
+    pub fn retune(&mut self, config: PidConfig) {
+        self.config = config;
+        let limit = config.integral_limit;
+        self.integral = self.integral.clamp(-limit, limit);
+    }
+
     /// The integral term's contribution to the output.
     pub fn integral(&self) -> f32 {
         self.integral
@@ -145,6 +155,24 @@ mod tests {
             output_limit: 1.0,
             derivative_tau_s: 0.0,
         }
+    }
+
+    #[test]
+    fn retuning_keeps_the_integral_and_clips_it_to_a_lower_limit() {
+        let mut pid = Pid::new(cfg());
+        for _ in 0..20 {
+            pid.update(0.1, 0.0, 0.0, 0.1, true).unwrap();
+        }
+        let built = pid.integral();
+        assert!(built > 0.15, "{built}");
+        // A new ki leaves the contribution where it is: the output does not jump.
+        pid.retune(PidConfig { ki: 5.0, ..cfg() });
+        assert_eq!(pid.integral(), built);
+        pid.retune(PidConfig {
+            integral_limit: 0.1,
+            ..cfg()
+        });
+        assert_eq!(pid.integral(), 0.1);
     }
 
     #[test]

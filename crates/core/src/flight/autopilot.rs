@@ -483,6 +483,9 @@ impl Autopilot {
     }
 }
 
+#[path = "autopilot_params.rs"]
+mod params_on_board;
+
 fn finite_or_zero(v: [f32; 3]) -> [f32; 3] {
     v.map(|x| if x.is_finite() { x } else { 0.0 })
 }

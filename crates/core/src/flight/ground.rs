@@ -124,11 +124,12 @@ impl GroundLink {
         self.terminated = true;
     }
 
-    /// Releases the terminate latch and the arm latch (a ground disarm).
+    /// Releases the terminate latch and the arm latch (a ground disarm); the manual latch goes
+    /// back to the radio's switch, which the next arming by radio obeys.
     pub fn disarm(&mut self) {
         self.terminated = false;
         self.arm = false;
-        self.manual = false;
+        self.manual = self.radio_manual;
     }
 
     pub fn follow_radio_arm(&mut self) {

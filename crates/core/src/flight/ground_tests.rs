@@ -151,6 +151,14 @@ fn the_radio_keeps_priority() {
     // A ground arm does not undo the radio's arm switch flipped off: it lands.
     s.pilot.arm = false;
     assert_eq!(s.run(0.1), Land);
+    // A ground disarm on the floor leaves the radio's manual switch in force for its arming.
+    s.height_m = 0.0;
+    s.run(1.0);
+    s.pilot.manual = true;
+    s.run(0.1);
+    assert_eq!(s.send(G::Disarm), Accepted);
+    s.pilot.arm = true;
+    assert_eq!(s.run(0.1), Manual);
     // The radio's kill switch beats a ground station that keeps sending.
     let mut s = ground_hold();
     s.pilot.kill = true;

@@ -426,6 +426,36 @@ fn failsafes_kill_switch_and_takeover_act_during_a_mission_as_in_hold() {
 }
 
 #[test]
+fn a_lost_ground_link_stops_a_mission_where_it_is() {
+    let mut c = Companion::new();
+    let mut f = explore(31, &mut c);
+    c.goal = Some(Goal::Point([1.5, 1.0]));
+    let linked = |f: &mut Flight, c: &mut Companion, secs, hb| {
+        f.fly_with(
+            secs,
+            |i, v| (c.send(i, v), i.ground.heartbeat = hb).1,
+            |_, _| {},
+        )
+    };
+    linked(&mut f, &mut c, 6.0, true);
+    assert_eq!(f.out.mode, FlightMode::Explore);
+    // Heartbeats stop: it holds where it is, neither at the take-off point nor where the
+    // companion now asks to go.
+    linked(&mut f, &mut c, 3.1, false);
+    assert_eq!(f.out.mode, FlightMode::Hold);
+    assert_eq!(f.out.failsafe, Some(FailsafeReason::LinkLost));
+    let stopped = [f.veh.position_m.x, f.veh.position_m.y];
+    assert!(hypotf(stopped[0], stopped[1]) > 1.5, "{stopped:?}");
+    c.goal = Some(Goal::Point([0.0, 0.0]));
+    linked(&mut f, &mut c, 5.0, false);
+    let moved = hypotf(
+        f.veh.position_m.x - stopped[0],
+        f.veh.position_m.y - stopped[1],
+    );
+    assert!(moved < 0.3, "drifted {moved} m towards the start");
+}
+
+#[test]
 fn setpoints_age_by_the_autopilot_clock() {
     let mut m = Mission::new(MissionConfig::default());
     let (frame, e) = (CompanionFrame::default(), EstimatedState::default());

@@ -6,6 +6,8 @@ pub mod events;
 pub mod ground;
 pub mod mission;
 pub mod onboard;
+mod param_table;
+pub mod params;
 pub mod supervisor;
 #[cfg(test)]
 mod test_vehicle;

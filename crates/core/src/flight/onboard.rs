@@ -7,6 +7,7 @@
 //! [`ScanMatchDelta`] is [`scan_match_delta`].
 
 use super::autopilot::{Autopilot, AutopilotConfig};
+use super::params::ParamError;
 use crate::geom::Pose2;
 use crate::matching::{LidarOdometry, OdometryConfig, OdometryStep};
 use crate::msgs::{EstimatedState, Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
@@ -42,6 +43,16 @@ impl<const N: usize> Onboard<N> {
 
     pub fn autopilot(&self) -> &Autopilot {
         &self.autopilot
+    }
+
+    /// The autopilot, for setting its parameters between steps.
+    pub fn autopilot_mut(&mut self) -> &mut Autopilot {
+        &mut self.autopilot
+    }
+
+    /// Sets a tuning parameter of the autopilot (see [`Autopilot::set_param`]).
+    pub fn set_param(&mut self, index: usize, value: f32) -> Result<f32, ParamError> {
+        self.autopilot.set_param(index, value)
     }
 
     pub fn rejected_points(&self) -> u64 {

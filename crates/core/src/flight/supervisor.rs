@@ -165,6 +165,12 @@ impl Supervisor {
         self.hold_height_m
     }
 
+    /// New thresholds and timings, keeping every timer and latch.
+    pub fn retune(&mut self, config: SupervisorConfig) {
+        self.config = config;
+        self.link.config = config.link;
+    }
+
     /// SAFETY-CRITICAL: a ground terminate, latched even on a step that cannot run.
     pub fn terminate(&mut self) {
         self.link.terminate();

@@ -13,7 +13,7 @@
 //! estimate, motor commands) is written into a shared [`FlightLog`] the caller keeps a handle
 //! to. The runner never hands the stack ground truth; the log holds only onboard values.
 
-use crate::runner::ground::{GroundStation, VehicleReport};
+use crate::runner::ground::{GroundLink, GroundStation, VehicleReport};
 use crate::runner::mission::Mission;
 use crate::runner::{FlightSoftware, SensorFrame, SetupError, STATE_RATE_HZ};
 use crate::sensors::lidar::{LidarProfile, LidarScan};
@@ -21,12 +21,11 @@ use crate::vehicle::{Frame, VehicleParams};
 use plumbline_core::control::airframe::Airframe;
 use plumbline_core::control::mrac::FallbackReason;
 use plumbline_core::flight::autopilot::AutopilotConfig;
-use plumbline_core::flight::events::Event;
 use plumbline_core::flight::onboard::Onboard;
 use plumbline_core::matching::OdometryConfig;
 use plumbline_core::msgs::{
     CompanionMessages, EstimatedState, FailsafeReason, FlightMode, FrameKind, GroundMessages,
-    ImuSample, Inputs, MotorCommands, Outputs, PilotInput,
+    ImuSample, Inputs, MotorCommands, PilotInput,
 };
 use plumbline_core::scan::{Beam, Scan};
 use std::cell::RefCell;
@@ -174,17 +173,6 @@ pub struct OnboardLink<const N: usize> {
     ground: Option<GroundLink>,
 }
 
-/// A linked ground station and what is in flight between it and the autopilot.
-struct GroundLink {
-    station: Box<dyn GroundStation>,
-    /// What the ground sent after the previous step, for the next one.
-    uplink: GroundMessages,
-    /// Events of the autopilot's log already reported (its running total).
-    events_seen: u32,
-    /// The new events of one step, reused so a step does not allocate.
-    new_events: Vec<Event>,
-}
-
 impl<const N: usize> OnboardLink<N> {
     /// A stack for `lidar`'s scans; fails when a revolution has more beams than `N`, rather
     /// than flying on silently truncated scans.
@@ -275,13 +263,24 @@ impl<const N: usize> OnboardLink<N> {
                 m.setpoint(frame.t_s - shift)
             }),
             companion: messages,
-            ground: self.ground.as_mut().map_or(GroundMessages::default(), |g| {
-                core::mem::take(&mut g.uplink)
-            }),
+            ground: self
+                .ground
+                .as_mut()
+                .map_or(GroundMessages::default(), |g| g.uplink()),
         };
         let out = self.onboard.step(&inputs, scan, dt_s as f32);
         if let Some(ground) = self.ground.as_mut() {
-            ground.exchange(frame, scan.map(|s| s.beams()), &out, &self.onboard);
+            let report = VehicleReport {
+                t_s: frame.t_s,
+                outputs: &out,
+                imu: self.last_imu,
+                battery: frame.battery,
+                sonar: frame.sonar,
+                scan: scan.map(|s| s.beams()),
+                events: &[],
+                events_missed: 0,
+            };
+            ground.exchange(report, self.onboard.autopilot_mut());
         }
         if let (None, Some(m), FlightMode::Hold) =
             (self.mission_shift_s, &self.script.mission, out.mode)
@@ -325,35 +324,6 @@ impl<const N: usize> OnboardLink<N> {
     }
 }
 
-impl GroundLink {
-    /// Reports the step to the station and keeps its answer for the next step.
-    fn exchange<const N: usize>(
-        &mut self,
-        frame: &SensorFrame<'_>,
-        scan: Option<&[plumbline_core::scan::Beam]>,
-        outputs: &Outputs,
-        onboard: &Onboard<N>,
-    ) {
-        let events = onboard.autopilot().events();
-        let new = events.total().wrapping_sub(self.events_seen);
-        self.events_seen = events.total();
-        self.new_events.clear();
-        let kept = events.iter().count();
-        self.new_events
-            .extend(events.iter().skip(kept.saturating_sub(new as usize)));
-        let report = VehicleReport {
-            t_s: frame.t_s,
-            outputs,
-            battery: frame.battery,
-            sonar: frame.sonar,
-            scan,
-            events: &self.new_events,
-            events_missed: new.saturating_sub(self.new_events.len() as u32),
-        };
-        self.uplink = self.station.exchange(&report);
-    }
-}
-
 impl<const N: usize> FlightSoftware for OnboardLink<N> {
     fn rate_hz(&self) -> f64 {
         ONBOARD_RATE_HZ
@@ -373,14 +343,12 @@ impl<const N: usize> FlightSoftware for OnboardLink<N> {
 }
 
 impl<const N: usize> OnboardLink<N> {
-    /// Links `station` to the stack from the next step on (replacing any linked before).
+    /// Links `station` to the stack from the next step on, beside any linked before.
     pub fn link_ground_station(&mut self, station: Box<dyn GroundStation>) {
-        self.ground = Some(GroundLink {
-            station,
-            uplink: GroundMessages::default(),
-            events_seen: self.onboard.autopilot().events().total(),
-            new_events: Vec::new(),
-        });
+        let events = self.onboard.autopilot().events().total();
+        self.ground
+            .get_or_insert_with(|| GroundLink::new(events))
+            .add(station);
     }
 }
 

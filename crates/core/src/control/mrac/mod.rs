@@ -112,6 +112,21 @@ impl<const C: usize> Mrac<C> {
         })
     }
 
+    /// New gains and bounds, keeping the reference model, the weights and the watchdog's state
+    /// (a lower weight bound is applied by the next learning step's projection). Switching the adaptive
+    /// element off takes at once; switching it on waits for the next [`Mrac::forget`] (disarm).
+    pub fn retune(&mut self, config: MracConfig) -> Result<(), MracConfigError> {
+        config.validate()?;
+        self.pb = [
+            lyapunov_pb(&config.pd_xy),
+            lyapunov_pb(&config.pd_xy),
+            lyapunov_pb(&config.pd_z),
+        ];
+        self.adaptive_on &= config.adaptive.enabled;
+        self.config = config;
+        Ok(())
+    }
+
     /// Restarts the reference model from the vehicle's state at the next step and forgets the
     /// hedge (mode changes). The learned weights stay: the model error they hold (a heavier
     /// vehicle, a weak motor) does not change with the mode.
