@@ -15,6 +15,7 @@
 
 mod commands;
 mod counters;
+mod crc;
 mod link;
 pub mod modes;
 pub mod ned;
@@ -36,6 +37,6 @@ pub use link::{
 pub use mavlink::dialects::common;
 pub use obstacle::{obstacle_distance, sector_of, ObstacleRange, SECTORS};
 pub use odometry::{odometry_from_estimate, odometry_from_pose_fix};
-pub use params::{ParamName, ParamRef, ParamRefusal, ParamRequest, ParameterStore, NAME_LEN};
+pub use params::{ParamName, ParamRef, ParamRequest, ParameterStore, NAME_LEN};
 pub use signing::{timestamp_from_unix, SigningKey};
 pub use telemetry::{SensorRanges, TelemetryInput, TelemetryRates};

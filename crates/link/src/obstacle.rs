@@ -33,15 +33,25 @@ impl Default for ObstacleRange {
     }
 }
 
+/// Centimetres, rounded to nearest, saturating (ranges beyond 655 m do not occur and must not
+/// wrap). Adding a half and truncating rounds a non-negative value without a libm call, which
+/// matters at 360 beams a revolution.
 fn to_cm(m: f32) -> u16 {
-    // Saturates: ranges beyond 655 m do not occur and must not wrap.
-    (m * 100.0).round().clamp(0.0, f32::from(u16::MAX - 2)) as u16
+    (m * 100.0 + 0.5).clamp(0.0, f32::from(u16::MAX - 2)) as u16
 }
+
+/// Sectors per radian.
+const SECTORS_PER_RAD: f32 = SECTORS as f32 / core::f32::consts::TAU;
 
 /// The sector (0..72) a beam at `angle_rad` (counter-clockwise from forward) falls in.
 pub fn sector_of(angle_rad: f32) -> usize {
-    let clockwise_deg = -angle_rad.to_degrees();
-    ((clockwise_deg / SECTOR_DEG).round() as i64).rem_euclid(SECTORS as i64) as usize
+    // Sector centres every 5 degrees clockwise: floor(x + 1/2) rounds to the nearest centre.
+    let x = -angle_rad * SECTORS_PER_RAD + 0.5;
+    let mut k = x as i64;
+    if (k as f32) > x {
+        k -= 1;
+    }
+    k.rem_euclid(SECTORS as i64) as usize
 }
 
 /// The OBSTACLE_DISTANCE message of one revolution.

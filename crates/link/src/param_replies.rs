@@ -1,10 +1,11 @@
 //! The replies of the parameter protocol, from the caller's [`ParameterStore`].
 
 use crate::link::{Link, LinkTime, Peer};
-use crate::params::{truncate, ParamName, ParamRef, ParamRefusal, ParamRequest, ParameterStore};
+use crate::params::{truncate, ParamName, ParamRef, ParamRequest, ParameterStore};
 use mavlink::dialects::common::{
     MavMessage, MavParamError, MavParamType, MavSeverity, PARAM_ERROR_DATA, PARAM_VALUE_DATA,
 };
+use plumbline_core::flight::params::ParamError;
 
 pub(crate) fn serve(
     link: &mut Link,
@@ -58,36 +59,37 @@ pub(crate) fn serve(
                     out,
                 );
             };
-            // Set by the store's own (possibly longer than 16 bytes) name.
-            let full = store.name(index).unwrap_or_default().to_owned();
-            match store.set(&full, value) {
+            match store.set(index, value) {
                 Ok(_) => send_value(link, store, index, now, out),
-                Err(ParamRefusal::Unknown) => send_error(
-                    link,
-                    from,
-                    Some(&name),
-                    None,
-                    MavParamError::MAV_PARAM_ERROR_DOES_NOT_EXIST,
-                    now,
-                    out,
-                ),
-                Err(ParamRefusal::OutOfRange { min, max }) => {
+                Err(refusal) => {
                     send_error(
                         link,
                         from,
                         Some(&name),
                         None,
-                        MavParamError::MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE,
+                        param_error(&refusal),
                         now,
                         out,
                     );
                     send_value(link, store, index, now, out);
-                    let text =
-                        format!("{} refused: {value} not in [{min}, {max}]", truncate(&full));
+                    let text = format!("{} {value}: {refusal}", name.as_str().unwrap_or_default());
                     link.statustext(MavSeverity::MAV_SEVERITY_WARNING, &text, now, out);
                 }
             }
         }
+    }
+}
+
+/// MAV_PARAM_ERROR of a refusal: a value the parameter cannot take (outside its bounds, not a
+/// number, against another parameter's) is out of range; a parameter that cannot change while
+/// armed is a permission matter.
+fn param_error(refusal: &ParamError) -> MavParamError {
+    match refusal {
+        ParamError::Unknown => MavParamError::MAV_PARAM_ERROR_DOES_NOT_EXIST,
+        ParamError::NotFinite | ParamError::OutOfRange { .. } | ParamError::Inconsistent { .. } => {
+            MavParamError::MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE
+        }
+        ParamError::NotWhileArmed => MavParamError::MAV_PARAM_ERROR_PERMISSION_DENIED,
     }
 }
 

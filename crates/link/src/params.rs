@@ -2,28 +2,22 @@
 //! holds the parameters: the caller implements [`ParameterStore`] (the autopilot's registry),
 //! the link turns requests into PARAM_VALUE replies and refusals into PARAM_ERROR.
 
+use plumbline_core::flight::params::ParamError;
+
 /// MAVLink parameter names are at most 16 bytes.
 pub const NAME_LEN: usize = 16;
 
-/// Why a parameter was not set; the value in force stays as it was.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ParamRefusal {
-    /// No parameter has this name.
-    Unknown,
-    /// The value is outside the parameter's bounds (or not finite).
-    OutOfRange { min: f32, max: f32 },
-}
-
-/// Named, bounded parameters as the link serves them. Names must be unique in their first 16
-/// bytes (MAVLink's limit): the link compares that much.
+/// Named, bounded parameters as the link serves them (the autopilot's registry,
+/// `plumbline_core::flight::params`, through whatever owns the configuration). Names must be
+/// unique in their first 16 bytes (MAVLink's limit): the link compares that much.
 pub trait ParameterStore {
     fn count(&self) -> usize;
     /// The name of parameter `index` (< `count()`).
     fn name(&self, index: usize) -> Option<&str>;
     /// The value in force of parameter `index`.
     fn value(&self, index: usize) -> Option<f32>;
-    /// Sets a parameter by name; returns the value now in force or why it was refused.
-    fn set(&mut self, name: &str, value: f32) -> Result<f32, ParamRefusal>;
+    /// Sets parameter `index`; returns the value now in force or why nothing changed.
+    fn set(&mut self, index: usize, value: f32) -> Result<f32, ParamError>;
 
     /// The index of the parameter whose name matches `name` in its first 16 bytes.
     fn index_of(&self, name: &str) -> Option<usize> {

@@ -3,8 +3,9 @@
 //! retried from its second byte, so a real frame hidden behind a false start marker is not lost.
 
 use crate::counters::DropCounters;
+use crate::crc::checksum;
 use mavlink::dialects::common::MavMessage;
-use mavlink::{calculate_crc, MavlinkVersion, Message};
+use mavlink::{MavlinkVersion, Message};
 
 const STX_V1: u8 = 0xFE;
 const STX_V2: u8 = 0xFD;
@@ -111,7 +112,7 @@ fn judge(bytes: &[u8], counters: &mut DropCounters) -> Candidate {
         return Candidate::Reject;
     }
     let expected = u16::from_le_bytes([bytes[crc_end], bytes[crc_end + 1]]);
-    if calculate_crc(&bytes[1..crc_end], extra_crc) == expected {
+    if checksum(&[&bytes[1..crc_end]], extra_crc) == expected {
         Candidate::Frame(len)
     } else {
         counters.bad_crc += 1;

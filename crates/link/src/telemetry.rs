@@ -198,9 +198,9 @@ impl Telemetry {
         }
         if out.failsafe != self.last_failsafe {
             if let Some(reason) = out.failsafe {
-                send(&statustext(
+                send(&statustext_of(
                     MavSeverity::MAV_SEVERITY_CRITICAL,
-                    &format!("failsafe: {}", failsafe_text(reason)),
+                    &["failsafe: ", failsafe_text(reason)],
                 ));
             }
             self.last_failsafe = out.failsafe;
@@ -248,6 +248,19 @@ impl Telemetry {
 
 /// A STATUSTEXT; text beyond MAVLink's 50 bytes is cut (every text here is shorter).
 pub(crate) fn statustext(severity: MavSeverity, text: &str) -> MavMessage {
+    statustext_of(severity, &[text])
+}
+
+/// A STATUSTEXT of `parts` joined, built in place (the announcements of every mode change
+/// need no allocation).
+fn statustext_of(severity: MavSeverity, parts: &[&str]) -> MavMessage {
+    let mut text = [0u8; 50];
+    let mut len = 0;
+    for part in parts {
+        let n = part.len().min(text.len() - len);
+        text[len..len + n].copy_from_slice(&part.as_bytes()[..n]);
+        len += n;
+    }
     MavMessage::STATUSTEXT(STATUSTEXT_DATA {
         severity,
         text: text.into(),

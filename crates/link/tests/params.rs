@@ -2,11 +2,12 @@
 mod common;
 
 use common::*;
+use plumbline_core::flight::params::ParamError;
 use plumbline_link::common::{
     MavMessage, MavParamError, MavParamType, PARAM_REQUEST_LIST_DATA, PARAM_REQUEST_READ_DATA,
     PARAM_SET_DATA,
 };
-use plumbline_link::{InboundEvent, Link, LinkConfig, ParamRefusal, ParameterStore, SigningKey};
+use plumbline_link::{InboundEvent, Link, LinkConfig, ParameterStore, SigningKey};
 
 /// Two bounded gains, one with a name longer than MAVLink's 16 bytes.
 struct Gains {
@@ -35,15 +36,13 @@ impl ParameterStore for Gains {
     fn value(&self, index: usize) -> Option<f32> {
         self.values.get(index).copied()
     }
-    fn set(&mut self, name: &str, value: f32) -> Result<f32, ParamRefusal> {
-        let i = self
-            .names
-            .iter()
-            .position(|n| *n == name)
-            .ok_or(ParamRefusal::Unknown)?;
-        let (min, max) = self.bounds[i];
+    fn set(&mut self, i: usize, value: f32) -> Result<f32, ParamError> {
+        let (min, max) = *self.bounds.get(i).ok_or(ParamError::Unknown)?;
+        if !value.is_finite() {
+            return Err(ParamError::NotFinite);
+        }
         if !(min..=max).contains(&value) {
-            return Err(ParamRefusal::OutOfRange { min, max });
+            return Err(ParamError::OutOfRange { min, max });
         }
         self.values[i] = value;
         Ok(value)
@@ -162,7 +161,7 @@ fn out_of_range_and_unknown_parameters_are_refused_never_applied() {
     assert_eq!(v.param_value, 1.0, "the unchanged value");
     assert_eq!(
         t.text.to_str().unwrap(),
-        "POS_XY_P refused: 50 not in [0, 5]"
+        "POS_XY_P 50: value outside [0, 5]"
     );
     let replies = exchange(&mut link, &mut store, &mut ground, &set("NO_SUCH", 1.0));
     let [MavMessage::PARAM_ERROR(e)] = &replies[..] else {
@@ -227,4 +226,20 @@ fn with_a_key_param_set_needs_a_signature_but_reading_does_not() {
         at(0.0),
     );
     assert_eq!(events.len(), 1);
+}
+
+#[test]
+fn the_autopilots_parameter_names_fit_mavlink_and_are_unique() {
+    use plumbline_core::flight::params;
+    let names: Vec<&str> = (0..params::count())
+        .map(|i| params::info(i).unwrap().name)
+        .collect();
+    assert!(names.len() > 10);
+    for (i, name) in names.iter().enumerate() {
+        assert!(
+            name.len() <= plumbline_link::NAME_LEN && name.is_ascii(),
+            "{name}"
+        );
+        assert!(!names[..i].contains(name), "{name} twice");
+    }
 }

@@ -150,9 +150,12 @@ fn a_kill_from_the_ground_stops_the_motors_at_the_next_step() {
     assert!(motors_after.iter().all(|s| s.motors == [0.0; 4]));
 }
 
+/// Parameter 0's value before a set, and what the set returned.
+type SetResult = (Option<f32>, Result<f32, ParamError>);
+
 /// A station that sets parameter 0 once in range and once out of it, keeping what it saw.
 struct Tuner {
-    results: Rc<RefCell<Vec<(Option<f32>, Result<f32, ParamError>)>>>,
+    results: Rc<RefCell<Vec<SetResult>>>,
 }
 
 impl GroundStation for Tuner {

@@ -52,8 +52,8 @@ pub fn link(args: &GroundArgs, flight: &mut Flight) -> Result<Linked, CliError> 
     for station in stations {
         flight.link_ground(station).map_err(|_| {
             CliError(
-                "--mavlink and --realtime need a scenario flown by the onboard stack; the test \
-                 pilot has no ground link (use --controller pid)"
+                "--mavlink and --realtime need a flight by the onboard stack (--controller pid or \
+                 mrac, a scenario other than survey); the test pilot has no ground link"
                     .into(),
             )
         })?;

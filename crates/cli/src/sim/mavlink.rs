@@ -19,8 +19,8 @@ use plumbline_io::input::read_text;
 use plumbline_io::link_port::{Endpoint, LinkPort, PortCounters};
 use plumbline_link::common::MavMessage;
 use plumbline_link::{
-    AckTo, DropCounters, InboundEvent, Link, LinkConfig, LinkTime, ParamRefusal, ParameterStore,
-    SigningKey, TelemetryInput,
+    AckTo, DropCounters, InboundEvent, Link, LinkConfig, LinkTime, ParameterStore, SigningKey,
+    TelemetryInput,
 };
 use plumbline_sim::runner::ground::{GroundStation, Parameters, VehicleReport};
 use serde_json::{json, Value};
@@ -388,20 +388,7 @@ impl ParameterStore for Registry<'_, '_> {
         self.0.get(index)
     }
 
-    fn set(&mut self, name: &str, value: f32) -> Result<f32, ParamRefusal> {
-        let index = self.index_of(name).ok_or(ParamRefusal::Unknown)?;
-        self.0
-            .set(index, value)
-            .map_err(|e| match (e, self.0.info(index)) {
-                (ParamError::OutOfRange { min, max }, _) => ParamRefusal::OutOfRange { min, max },
-                // A value within bounds but at odds with the rest of the tuning, or one that may
-                // only change on the ground, is refused like an out-of-range one (the link knows
-                // no other refusal); the bounds it reports are the parameter's.
-                (_, Some(p)) => ParamRefusal::OutOfRange {
-                    min: p.min,
-                    max: p.max,
-                },
-                (_, None) => ParamRefusal::Unknown,
-            })
+    fn set(&mut self, index: usize, value: f32) -> Result<f32, ParamError> {
+        self.0.set(index, value)
     }
 }
