@@ -2,8 +2,9 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
-mod lidar_cmd;
+mod companion_cmd;
 mod eval_cmd;
+mod lidar_cmd;
 mod log_args;
 mod numeric;
 mod odometry_cmd;
@@ -35,6 +36,9 @@ enum Command {
     Eval(eval_cmd::EvalArgs),
     /// Lidar devices: decode raw captures, record from a serial port, plot a revolution.
     Lidar(lidar_cmd::LidarArgs),
+    /// Companion computer: lidar SLAM poses and obstacles to a PX4 or ArduPilot autopilot
+    /// over MAVLink.
+    Companion(companion_cmd::CompanionArgs),
     /// Fly the simulator: emulated lidar/IMU/sonar logs with exact ground truth.
     Sim(Box<sim::SimArgs>),
     /// Studies that fly many simulated runs and answer with a table and plots.
@@ -48,6 +52,7 @@ fn main() -> ExitCode {
         Command::Slam(args) => slam_cmd::run(args),
         Command::Eval(args) => eval_cmd::run(args),
         Command::Lidar(args) => lidar_cmd::run(args),
+        Command::Companion(args) => companion_cmd::run(args),
         Command::Sim(args) => sim::run(*args),
         Command::Study(args) => study::run(args),
     };

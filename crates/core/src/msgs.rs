@@ -212,6 +212,22 @@ pub enum FlightMode {
     Killed,
 }
 
+impl FlightMode {
+    /// The mode's name in summaries, logs and ground-station texts.
+    pub const fn name(self) -> &'static str {
+        match self {
+            FlightMode::Disarmed => "disarmed",
+            FlightMode::Takeoff => "takeoff",
+            FlightMode::Hold => "hold",
+            FlightMode::Explore => "explore",
+            FlightMode::Return => "return",
+            FlightMode::Land => "land",
+            FlightMode::Manual => "manual",
+            FlightMode::Killed => "killed",
+        }
+    }
+}
+
 /// Why the autopilot overrode the pilot or the mission.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FailsafeReason {

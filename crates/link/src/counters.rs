@@ -19,8 +19,8 @@ pub struct DropCounters {
     pub malformed: u64,
     /// Messages addressed to another system or component.
     pub other_target: u64,
-    /// State-changing messages (COMMAND_LONG, MANUAL_CONTROL, PARAM_SET) that were not signed
-    /// while a key is set.
+    /// State-changing messages (COMMAND_LONG, MANUAL_CONTROL, PARAM_SET) and ground-station
+    /// HEARTBEATs that were not signed while a key is set.
     pub unsigned: u64,
     /// Signed frames whose signature does not match the key.
     pub bad_signature: u64,

@@ -268,6 +268,11 @@ impl Link {
         };
         match message {
             MavMessage::HEARTBEAT(h) if h.mavtype == MavType::MAV_TYPE_GCS => {
+                // With a key, only a signed heartbeat keeps the ground link alive: an unsigned
+                // one could otherwise hold off the link-lost failsafe for a station that is gone.
+                if self.signer.is_some() && !authentic {
+                    return self.counters.unsigned += 1;
+                }
                 events.push(InboundEvent::GroundHeartbeat {
                     system_id: frame.system_id,
                 });

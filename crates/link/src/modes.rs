@@ -81,20 +81,6 @@ pub fn system_status(mode: FlightMode, failsafe: Option<FailsafeReason>) -> MavS
     }
 }
 
-/// A short name for STATUSTEXT.
-pub fn mode_name(mode: FlightMode) -> &'static str {
-    match mode {
-        FlightMode::Disarmed => "disarmed",
-        FlightMode::Takeoff => "takeoff",
-        FlightMode::Hold => "hold",
-        FlightMode::Explore => "explore",
-        FlightMode::Return => "return",
-        FlightMode::Land => "land",
-        FlightMode::Manual => "manual",
-        FlightMode::Killed => "killed",
-    }
-}
-
 /// A short description of a failsafe for STATUSTEXT.
 pub fn failsafe_text(reason: FailsafeReason) -> &'static str {
     match reason {

@@ -7,6 +7,14 @@ use mavlink::dialects::common::{
 };
 use plumbline_core::flight::params::ParamError;
 
+/// Where the replies to one request go.
+struct Replies<'a> {
+    link: &'a mut Link,
+    to: Peer,
+    now: LinkTime,
+    out: &'a mut Vec<u8>,
+}
+
 pub(crate) fn serve(
     link: &mut Link,
     request: &ParamRequest,
@@ -15,67 +23,36 @@ pub(crate) fn serve(
     now: LinkTime,
     out: &mut Vec<u8>,
 ) {
-    match *request {
+    let mut reply = Replies {
+        link,
+        to: from,
+        now,
+        out,
+    };
+    let which = match *request {
         ParamRequest::List => {
             for index in 0..store.count() {
-                send_value(link, store, index, now, out);
+                reply.value(store, index);
             }
+            return;
         }
-        ParamRequest::Read(ParamRef::Index(i)) if usize::from(i) < store.count() => {
-            send_value(link, store, usize::from(i), now, out);
-        }
-        ParamRequest::Read(ParamRef::Index(i)) => {
-            send_error(
-                link,
-                from,
-                None,
-                Some(i),
-                MavParamError::MAV_PARAM_ERROR_DOES_NOT_EXIST,
-                now,
-                out,
-            );
-        }
-        ParamRequest::Read(ParamRef::Name(name)) => match lookup(store, &name) {
-            Some(index) => send_value(link, store, index, now, out),
-            None => send_error(
-                link,
-                from,
-                Some(&name),
-                None,
-                MavParamError::MAV_PARAM_ERROR_DOES_NOT_EXIST,
-                now,
-                out,
-            ),
-        },
-        ParamRequest::Set { name, value } => {
-            let Some(index) = lookup(store, &name) else {
-                return send_error(
-                    link,
-                    from,
-                    Some(&name),
-                    None,
-                    MavParamError::MAV_PARAM_ERROR_DOES_NOT_EXIST,
-                    now,
-                    out,
-                );
-            };
-            match store.set(index, value) {
-                Ok(_) => send_value(link, store, index, now, out),
-                Err(refusal) => {
-                    send_error(
-                        link,
-                        from,
-                        Some(&name),
-                        None,
-                        param_error(&refusal),
-                        now,
-                        out,
-                    );
-                    send_value(link, store, index, now, out);
-                    let text = format!("{} {value}: {refusal}", name.as_str().unwrap_or_default());
-                    link.statustext(MavSeverity::MAV_SEVERITY_WARNING, &text, now, out);
-                }
-            }
+        ParamRequest::Read(which) => which,
+        ParamRequest::Set { name, .. } => ParamRef::Name(name),
+    };
+    let Some(index) = lookup(store, &which) else {
+        return reply.error(&which, MavParamError::MAV_PARAM_ERROR_DOES_NOT_EXIST);
+    };
+    let ParamRequest::Set { name, value } = *request else {
+        return reply.value(store, index);
+    };
+    match store.set(index, value) {
+        Ok(_) => reply.value(store, index),
+        Err(refusal) => {
+            reply.error(&which, param_error(&refusal));
+            reply.value(store, index);
+            let text = format!("{} {value}: {refusal}", name.as_str().unwrap_or_default());
+            let Replies { link, now, out, .. } = reply;
+            link.statustext(MavSeverity::MAV_SEVERITY_WARNING, &text, now, out);
         }
     }
 }
@@ -93,47 +70,42 @@ fn param_error(refusal: &ParamError) -> MavParamError {
     }
 }
 
-fn lookup(store: &dyn ParameterStore, name: &ParamName) -> Option<usize> {
-    name.as_str().and_then(|n| store.index_of(n))
+fn lookup(store: &dyn ParameterStore, which: &ParamRef) -> Option<usize> {
+    match which {
+        ParamRef::Index(i) => Some(usize::from(*i)).filter(|&i| i < store.count()),
+        ParamRef::Name(name) => name.as_str().and_then(|n| store.index_of(n)),
+    }
 }
 
-fn send_value(
-    link: &mut Link,
-    store: &dyn ParameterStore,
-    index: usize,
-    now: LinkTime,
-    out: &mut Vec<u8>,
-) {
-    let (Some(name), Some(value)) = (store.name(index), store.value(index)) else {
-        return;
-    };
-    let clamp16 = |n: usize| u16::try_from(n).unwrap_or(u16::MAX);
-    let message = MavMessage::PARAM_VALUE(PARAM_VALUE_DATA {
-        param_value: value,
-        param_count: clamp16(store.count()),
-        param_index: clamp16(index),
-        param_id: truncate(name).into(),
-        param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
-    });
-    link.send(&message, now, out);
-}
+impl Replies<'_> {
+    fn value(&mut self, store: &dyn ParameterStore, index: usize) {
+        let (Some(name), Some(value)) = (store.name(index), store.value(index)) else {
+            return;
+        };
+        let clamp16 = |n: usize| u16::try_from(n).unwrap_or(u16::MAX);
+        let message = MavMessage::PARAM_VALUE(PARAM_VALUE_DATA {
+            param_value: value,
+            param_count: clamp16(store.count()),
+            param_index: clamp16(index),
+            param_id: truncate(name).into(),
+            param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
+        });
+        self.link.send(&message, self.now, self.out);
+    }
 
-fn send_error(
-    link: &mut Link,
-    to: Peer,
-    name: Option<&ParamName>,
-    index: Option<u16>,
-    error: MavParamError,
-    now: LinkTime,
-    out: &mut Vec<u8>,
-) {
-    let message = MavMessage::PARAM_ERROR(PARAM_ERROR_DATA {
-        // -1 says "identified by name" (and an index beyond i16 cannot be a real one either).
-        param_index: index.and_then(|i| i16::try_from(i).ok()).unwrap_or(-1),
-        target_system: to.system_id,
-        target_component: to.component_id,
-        param_id: name.map(ParamName::raw).unwrap_or_default().into(),
-        error,
-    });
-    link.send(&message, now, out);
+    fn error(&mut self, which: &ParamRef, error: MavParamError) {
+        let (param_index, param_id) = match which {
+            // An index beyond i16 cannot be a real one; -1 then says "see the name" (empty).
+            ParamRef::Index(i) => (i16::try_from(*i).unwrap_or(-1), [0; 16]),
+            ParamRef::Name(name) => (-1, ParamName::raw(name)),
+        };
+        let message = MavMessage::PARAM_ERROR(PARAM_ERROR_DATA {
+            param_index,
+            target_system: self.to.system_id,
+            target_component: self.to.component_id,
+            param_id: param_id.into(),
+            error,
+        });
+        self.link.send(&message, self.now, self.out);
+    }
 }

@@ -18,7 +18,7 @@
 //! periods, so a 50 Hz stream sent from a 200 Hz loop goes out exactly every fourth step and
 //! a late step does not make a burst.
 
-use crate::modes::{base_mode, custom_mode, failsafe_text, mode_name, system_status};
+use crate::modes::{base_mode, custom_mode, failsafe_text, system_status};
 use crate::ned::{flip_euler, flip_yz};
 use crate::obstacle::{obstacle_distance, ObstacleRange};
 use crate::odometry::odometry_from_estimate;
@@ -192,7 +192,7 @@ impl Telemetry {
             // sees where the vehicle is.
             send(&statustext(
                 MavSeverity::MAV_SEVERITY_NOTICE,
-                &format!("mode {}", mode_name(out.mode)),
+                &format!("mode {}", out.mode.name()),
             ));
             self.last_mode = Some(out.mode);
         }

@@ -293,13 +293,17 @@ fn with_a_key_only_signed_state_changes_are_obeyed() {
     // A fresh frame of the same stream is fine.
     let (events, _) = feed(&mut link, &ground.frame(&kill), at(2.0));
     assert_eq!(commands(&events), [GroundCommand::Terminate]);
-    // Unsigned messages that change nothing are still read.
+    // An unsigned ground heartbeat does not keep the link alive (it would hold off the
+    // link-lost failsafe for a station that is gone); a signed one does.
     let (events, _) = feed(
         &mut link,
         &Ground::unsigned().frame(&gcs_heartbeat()),
         at(2.0),
     );
-    assert_eq!(events.len(), 1);
+    assert!(events.is_empty());
+    assert_eq!(link.counters().unsigned, 2);
+    let (events, _) = feed(&mut link, &ground.frame(&gcs_heartbeat()), at(3.0));
+    assert_eq!(events, [InboundEvent::GroundHeartbeat { system_id: 255 }]);
 }
 
 #[test]

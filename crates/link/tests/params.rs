@@ -168,6 +168,20 @@ fn out_of_range_and_unknown_parameters_are_refused_never_applied() {
         panic!("{replies:?}")
     };
     assert_eq!(e.error, MavParamError::MAV_PARAM_ERROR_DOES_NOT_EXIST);
+    let read_5 = MavMessage::PARAM_REQUEST_READ(PARAM_REQUEST_READ_DATA {
+        param_index: 5,
+        target_system: 1,
+        target_component: 1,
+        param_id: "".into(),
+    });
+    let replies = exchange(&mut link, &mut store, &mut ground, &read_5);
+    let [MavMessage::PARAM_ERROR(e)] = &replies[..] else {
+        panic!("{replies:?}")
+    };
+    assert_eq!(
+        (e.param_index, e.error),
+        (5, MavParamError::MAV_PARAM_ERROR_DOES_NOT_EXIST)
+    );
     let nan = exchange(
         &mut link,
         &mut store,

@@ -97,9 +97,13 @@ fn with_a_key_pymavlinks_unsigned_state_changes_are_refused() {
         &fixture("ground-unsigned.bin"),
         LinkTime::since(0.0, 0.0),
     );
-    // The heartbeat and the two parameter reads change nothing and still arrive.
-    assert_eq!(events.len(), 3, "{events:?}");
-    assert_eq!(link.counters().unsigned, 7);
+    // The two parameter reads change nothing and still arrive; the unsigned heartbeat does
+    // not keep the link alive, so it is refused with the state changes.
+    assert_eq!(events.len(), 2, "{events:?}");
+    assert!(events
+        .iter()
+        .all(|e| matches!(e, InboundEvent::Param { .. })));
+    assert_eq!(link.counters().unsigned, 8);
 }
 
 #[test]

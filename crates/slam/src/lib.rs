@@ -20,5 +20,5 @@ pub mod worker;
 
 pub use config::{EdgeNoise, GuardConfig, LoopConfig, SlamConfig};
 pub use observed::Observed;
-pub use slam::{Finished, ScanPose, Slam, TrackingStats};
+pub use slam::{Finished, ScanPose, Slam, TrackingStats, MAP_JUMP_M, MAP_JUMP_RAD};
 pub use tracker::{local_map_cells, ConfigError};

@@ -15,6 +15,11 @@ use plumbline_core::geom::Pose2;
 use plumbline_core::matching::local_map::MapCell;
 use plumbline_core::scan::Scan;
 
+/// A keyframe moving by more than this (m, rad) counts as a jump of the map (see
+/// [`Slam::map_jumped`]); smaller corrections are the graph settling.
+pub const MAP_JUMP_M: f32 = 0.05;
+pub const MAP_JUMP_RAD: f32 = 0.02;
+
 /// Where one scan ended up.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ScanPose {
@@ -152,6 +157,19 @@ impl<'m, const N: usize> Slam<'m, N> {
             }
             None => self.keyframe_tracking[k],
         }
+    }
+
+    /// Whether the map moved under `earlier` (a scan this SLAM placed before) by more than
+    /// [`MAP_JUMP_M`] or [`MAP_JUMP_RAD`]: a loop closure moves old keyframes, and every later
+    /// pose jumps with them, which a consumer of the poses must be told (MAVLink ODOMETRY's
+    /// `reset_counter`). `false` when the scan had no keyframe.
+    pub fn map_jumped(&self, earlier: &ScanPose) -> bool {
+        let Some(now) = earlier.keyframe.and_then(|k| self.keyframe_pose(k)) else {
+            return false;
+        };
+        let then = earlier.pose.compose(earlier.relative.inverse());
+        let (d, a) = then.distance_to(now);
+        d > MAP_JUMP_M || a > MAP_JUMP_RAD
     }
 
     /// Keyframes made so far (the threaded backend may not have processed the newest yet).

@@ -12,7 +12,7 @@ use plumbline_io::serial::{DecodeSummary, Device};
 use serde_json::{json, Map, Value};
 
 /// Line speeds a serial lidar can be run at; outside this, stamps by byte position mean nothing.
-const BAUD_RANGE: Range = Range::closed(1200.0, 4_000_000.0);
+pub(crate) const BAUD_RANGE: Range = Range::closed(1200.0, 4_000_000.0);
 
 #[derive(Args)]
 pub struct LidarArgs {
@@ -66,7 +66,7 @@ fn summary_json(device: Device, summary: &DecodeSummary) -> Map<String, Value> {
 /// are the wrong `--device` or a capture taken at the wrong baud rate. So is one whose frames
 /// pass their checks but make only revolutions the device cannot send (weak checks pass foreign
 /// bytes by chance); when most revolutions are like that, a warning says so.
-fn require_frames(what: &str, device: Device, summary: &DecodeSummary) -> CliResult {
+pub(crate) fn require_frames(what: &str, device: Device, summary: &DecodeSummary) -> CliResult {
     let s = &summary.stats;
     if s.bytes > 0 && s.packets_ok == 0 && s.implausible == 0 {
         return Err(CliError(format!(

@@ -9,7 +9,7 @@ use crate::report::CliError;
 use clap::Args;
 use plotters::prelude::*;
 use plumbline_core::control::mrac::FallbackReason;
-use plumbline_core::msgs::{FailsafeReason, FlightMode};
+use plumbline_core::msgs::FailsafeReason;
 use plumbline_sim::runner::companion::Strategy;
 use plumbline_sim::runner::onboard_link::FlightLog;
 use plumbline_sim::runner::{SimConfig, StateSample};
@@ -125,19 +125,6 @@ fn fallback_name(r: FallbackReason) -> &'static str {
     }
 }
 
-fn mode_name(m: FlightMode) -> &'static str {
-    match m {
-        FlightMode::Disarmed => "disarmed",
-        FlightMode::Takeoff => "takeoff",
-        FlightMode::Hold => "hold",
-        FlightMode::Explore => "explore",
-        FlightMode::Return => "return",
-        FlightMode::Land => "land",
-        FlightMode::Manual => "manual",
-        FlightMode::Killed => "killed",
-    }
-}
-
 /// Adds what the onboard stack did, and what only an onboard flight is scored on, to
 /// `summary`.
 pub fn extend_summary(
@@ -150,7 +137,7 @@ pub fn extend_summary(
     let modes: Vec<Value> = log
         .modes
         .iter()
-        .map(|(t, m)| json!({ "t_s": t, "mode": mode_name(*m) }))
+        .map(|(t, m)| json!({ "t_s": t, "mode": m.name() }))
         .collect();
     let extra = json!({
         "controller": args.controller.as_deref().unwrap_or("pid"),

@@ -8,7 +8,7 @@
 //! - Arm: from disarmed, arms as the radio's arm switch does (take-off to the configured hold
 //!   height, or manual when the radio's manual switch is on); needs a trustworthy estimate and
 //!   a battery that is not critical. Armed already: accepted, nothing changes. Refused while
-//!   landing (land first) and while killed.
+//!   landing (the landing finishes first) and while killed.
 //! - Takeoff: from disarmed, arms and climbs to the asked height (bounded by
 //!   `GroundLinkConfig`); in take-off or hold, moves the hold height there.
 //! - Disarm: on the floor (below the touchdown height, slower than the touchdown speed) stops

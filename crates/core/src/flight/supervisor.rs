@@ -295,8 +295,10 @@ impl Supervisor {
         };
         self.arm_seen_off = false;
         self.failsafe = None;
-        self.hold_height_m =
-            (self.takeoff_height_request_m.take()).unwrap_or(self.config.takeoff_height_m);
+        self.hold_height_m = self
+            .takeoff_height_request_m
+            .take()
+            .unwrap_or(self.config.takeoff_height_m);
         // The lidar gets a full timeout from arming to report.
         self.last_scan_t_s = s.t_s;
         self.set_mode(s.t_s, next);

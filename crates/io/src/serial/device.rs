@@ -33,6 +33,16 @@ impl Device {
             Device::Xv11 | Device::Xv11Old | Device::Urg | Device::Rplidar => 115_200,
         }
     }
+
+    /// The nearest distance the device measures reliably (m), from its datasheet: nearer
+    /// returns say nothing about obstacles.
+    pub fn min_range_m(self) -> f32 {
+        match self {
+            Device::Xv11 | Device::Xv11Old => 0.06,
+            Device::Urg => UrgConfig::URG_04LX.min_range_mm as f32 / 1000.0,
+            Device::Rplidar => 0.15,
+        }
+    }
 }
 
 impl FromStr for Device {

@@ -48,10 +48,6 @@ const YAW_RATE_RAD_S: f32 = 0.5;
 /// Quality of a matched pose and of a predicted one (the autopilot refuses below 20).
 const QUALITY_MATCHED: u8 = 80;
 const QUALITY_PREDICTED: u8 = 10;
-/// An old keyframe moving by more than this means the map was corrected (a loop closure): the
-/// pose jumps, and the reset counter says so, m and rad.
-const RESET_JUMP_M: f32 = 0.05;
-const RESET_JUMP_RAD: f32 = 0.02;
 
 /// How the vehicle chooses where to go.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -163,15 +159,9 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
     /// The pose fix for `at`, with the reset counter bumped when a map correction moved the
     /// keyframe the previous scan was anchored to.
     fn fix(&mut self, t_s: f64, at: &ScanPose) -> PoseFix {
-        if let Some((last, k)) = self.last.and_then(|l| l.keyframe.map(|k| (l, k))) {
-            let then = last.pose.compose(last.relative.inverse());
-            if let Some(now) = self.slam.keyframe_pose(k) {
-                let (d, a) = then.distance_to(now);
-                if d > RESET_JUMP_M || a > RESET_JUMP_RAD {
-                    self.reset_counter = self.reset_counter.wrapping_add(1);
-                    self.log.borrow_mut().resets += 1;
-                }
-            }
+        if self.last.is_some_and(|last| self.slam.map_jumped(&last)) {
+            self.reset_counter = self.reset_counter.wrapping_add(1);
+            self.log.borrow_mut().resets += 1;
         }
         PoseFix {
             t_s,

@@ -1,0 +1,172 @@
+//! One revolution through the companion: SLAM, the pose fix, the obstacles around, and what
+//! goes to the autopilot, with the counts and times the summary reports.
+
+use super::fix::{FixMaker, Resets};
+use crate::odometry_cmd::{percentile, MAX_BEAMS};
+use crate::report::CliError;
+use plumbline_core::msgs::PoseFix;
+use plumbline_core::scan::{Beam, Scan};
+use plumbline_io::carmen::LaserRecord;
+use plumbline_slam::Slam;
+use serde_json::{json, Value};
+use std::time::Instant;
+
+/// Seconds between heartbeats, on the scans' clock (the host's for a live lidar).
+const HEARTBEAT_PERIOD_S: f64 = 1.0;
+
+/// What the companion tells the autopilot; the MAVLink encoding lives behind it.
+pub trait AutopilotLink {
+    /// HEARTBEAT: a companion computer is here.
+    fn heartbeat(&mut self, t_s: f64) -> Result<bool, CliError>;
+    /// ODOMETRY from a pose fix.
+    fn odometry(&mut self, fix: &PoseFix) -> Result<bool, CliError>;
+    /// OBSTACLE_DISTANCE from a revolution's beams (body frame); `max_range_m` is the lidar's
+    /// reach.
+    fn obstacles(&mut self, t_s: f64, beams: &[Beam], max_range_m: f32) -> Result<bool, CliError>;
+}
+
+/// A link lent to a run, so the caller reads its counters afterwards.
+impl<T: AutopilotLink> AutopilotLink for &mut T {
+    fn heartbeat(&mut self, t_s: f64) -> Result<bool, CliError> {
+        (**self).heartbeat(t_s)
+    }
+    fn odometry(&mut self, fix: &PoseFix) -> Result<bool, CliError> {
+        (**self).odometry(fix)
+    }
+    fn obstacles(&mut self, t_s: f64, beams: &[Beam], max_range_m: f32) -> Result<bool, CliError> {
+        (**self).obstacles(t_s, beams, max_range_m)
+    }
+}
+
+/// Messages handed to the link: sent, or dropped because they could not go out at once.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counted {
+    pub sent: usize,
+    pub dropped: usize,
+}
+
+impl Counted {
+    fn add(&mut self, sent: bool) {
+        if sent {
+            self.sent += 1;
+        } else {
+            self.dropped += 1;
+        }
+    }
+}
+
+/// The SLAM and the link, and what the run has seen so far.
+pub struct Companion<'m, L> {
+    slam: Slam<'m, MAX_BEAMS>,
+    fixes: FixMaker,
+    link: L,
+    scan: Box<Scan<MAX_BEAMS>>,
+    last_heartbeat_s: Option<f64>,
+    previous_s: Option<f64>,
+    pub scans: usize,
+    /// Revolutions with no valid beam (a covered or stopped lidar).
+    pub empty_scans: usize,
+    /// Revolutions whose match failed (sent with quality -1).
+    pub lost_scans: usize,
+    /// Time between revolutions whose pose was a prediction, summed (s).
+    pub lost_s: f64,
+    pub odometry: Counted,
+    pub obstacles: Counted,
+    pub heartbeats: Counted,
+    /// Every revolution's time through the pipeline (µs): SLAM, fix, encoding, sending.
+    times_us: Vec<f64>,
+    /// The last fix sent, for tests and the summary.
+    pub last_fix: Option<PoseFix>,
+}
+
+impl<'m, L: AutopilotLink> Companion<'m, L> {
+    pub fn new(slam: Slam<'m, MAX_BEAMS>, link: L) -> Self {
+        Self {
+            slam,
+            fixes: FixMaker::default(),
+            link,
+            scan: Box::default(),
+            last_heartbeat_s: None,
+            previous_s: None,
+            scans: 0,
+            empty_scans: 0,
+            lost_scans: 0,
+            lost_s: 0.0,
+            odometry: Counted::default(),
+            obstacles: Counted::default(),
+            heartbeats: Counted::default(),
+            times_us: Vec::new(),
+            last_fix: None,
+        }
+    }
+
+    /// One revolution: an error only for what ends the run (a scan larger than any lidar's,
+    /// the autopilot's port gone); everything else is counted and reported.
+    pub fn revolution(&mut self, rec: &LaserRecord) -> Result<(), CliError> {
+        let t_s = rec.timestamp_s;
+        // A clock that steps back (a device reset) restarts the heartbeat period too.
+        if self
+            .last_heartbeat_s
+            .is_none_or(|h| t_s - h >= HEARTBEAT_PERIOD_S || t_s < h)
+        {
+            let s = self.link.heartbeat(t_s)?;
+            self.heartbeats.add(s);
+            self.last_heartbeat_s = Some(t_s);
+        }
+        *self.scan = rec.to_scan().map_err(|_| {
+            CliError(format!(
+                "revolution {} has {} beams; at most {MAX_BEAMS} are supported",
+                self.scans + 1,
+                rec.beam_count()
+            ))
+        })?;
+        self.scans += 1;
+        self.empty_scans += usize::from(self.scan.valid_count() == 0);
+        let start = Instant::now();
+        let at = self.slam.add_scan(&self.scan, None);
+        let fix = self.fixes.fix(&self.slam, t_s, &at);
+        let sent = self.link.odometry(&fix)?;
+        self.odometry.add(sent);
+        let sent = self
+            .link
+            .obstacles(t_s, self.scan.beams(), rec.max_range_m)?;
+        self.obstacles.add(sent);
+        self.times_us.push(start.elapsed().as_secs_f64() * 1e6);
+        if at.predicted {
+            self.lost_scans += 1;
+            self.lost_s += self.previous_s.map_or(0.0, |p| (t_s - p).abs());
+        }
+        self.previous_s = Some(t_s);
+        self.last_fix = Some(fix);
+        Ok(())
+    }
+
+    pub fn resets(&self) -> Resets {
+        self.fixes.resets
+    }
+
+    /// The summary keys of the pipeline itself.
+    pub fn summary(&self) -> Value {
+        let mut times = self.times_us.clone();
+        times.sort_by(f64::total_cmp);
+        let resets = self.resets();
+        json!({
+            "scans": self.scans,
+            "empty_scans": self.empty_scans,
+            "lost_scans": self.lost_scans,
+            "lost_s": self.lost_s,
+            "relocalizations": resets.total(),
+            "map_corrections": resets.map_corrections,
+            "recoveries": resets.recoveries,
+            "wide_searches": resets.searches,
+            "reset_counter": self.last_fix.map(|f| f.reset_counter),
+            "odometry_sent": self.odometry.sent,
+            "odometry_dropped": self.odometry.dropped,
+            "obstacle_distance_sent": self.obstacles.sent,
+            "obstacle_distance_dropped": self.obstacles.dropped,
+            "heartbeats_sent": self.heartbeats.sent,
+            "median_scan_us": percentile(&times, 0.5),
+            "p99_scan_us": percentile(&times, 0.99),
+        })
+    }
+}
