@@ -19,3 +19,9 @@ if [ ! -x "$root/.venv/bin/python" ]; then
 fi
 "$root/.venv/bin/python" -m pip install -q --disable-pip-version-check \
   -r "$root/scripts/requirements-test.txt"
+# Headless Chromium for the web view's browser tests (Playwright in .venv drives it; no browser
+# download).
+if ! command -v chromium >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1; then
+  (apt-get update -qq && apt-get install -y -qq chromium) >/dev/null 2>&1 \
+    || echo "setup: could not install chromium; the web view tests will fail" >&2
+fi

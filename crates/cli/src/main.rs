@@ -13,6 +13,7 @@ mod report;
 mod sim;
 mod slam_cmd;
 mod study;
+mod view_args;
 
 #[derive(Parser)]
 #[command(

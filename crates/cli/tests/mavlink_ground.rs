@@ -8,36 +8,14 @@
 mod support;
 
 use std::net::UdpSocket;
-use std::path::PathBuf;
-use std::process::Command;
-use support::{last_json, run, stderr, BIN, REPO};
+use support::{last_json, run, stderr, venv_script, BIN};
 
-fn repo() -> PathBuf {
-    PathBuf::from(REPO)
-}
-
-/// Runs one case of the pymavlink script and fails with its output unless it passes.
+/// Runs one case of the pymavlink script.
 fn ground_station(case: &str) {
-    let python = repo().join(".venv/bin/python");
-    assert!(
-        python.is_file(),
-        "{} is missing: run scripts/setup.sh to install the pymavlink ground station",
-        python.display()
-    );
-    let script = repo().join("tests/mavlink/ground_station.py");
-    let out = Command::new(&python)
-        .arg(&script)
-        .arg(BIN)
-        .arg(case)
-        .output()
-        .expect("start python");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    println!("{stdout}");
-    assert!(
-        out.status.success(),
-        "pymavlink {case} failed ({}):\n{stdout}\n{stderr}",
-        out.status
+    venv_script(
+        "tests/mavlink/ground_station.py",
+        &[BIN, case],
+        "the pymavlink ground station",
     );
 }
 

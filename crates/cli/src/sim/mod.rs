@@ -10,12 +10,14 @@ mod onboard;
 mod outputs;
 mod pace;
 pub(crate) mod plot;
+mod view;
 mod world;
 
 use crate::log_args::LogArgs;
 use crate::numeric::{within, Range};
 use crate::plot::write_png;
 use crate::report::{print_summary, progress, CliError, CliResult};
+use crate::view_args::{self, ViewArgs};
 use clap::builder::{PossibleValue, PossibleValuesParser};
 use clap::Args;
 use outputs::{create, Collector, SensorLogs};
@@ -30,6 +32,7 @@ use plumbline_sim::vehicle::VehicleParams;
 use plumbline_sim::world::World;
 use serde_json::json;
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 use std::time::Instant;
 
 #[derive(Args, Debug)]
@@ -78,6 +81,8 @@ pub struct SimArgs {
     pub ground: ground::GroundArgs,
     #[command(flatten)]
     pub log_args: LogArgs,
+    #[command(flatten)]
+    pub view: ViewArgs,
     /// Write scans.clf, imu.csv, sonar.csv, truth.txt, truth.relations, summary.json and plots.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -300,6 +305,17 @@ pub fn run(args: SimArgs) -> CliResult {
     if let Some(dir) = args.out.as_deref() {
         check_inputs_outside(&args, dir)?;
     }
+    let view = args.view.start()?.map(Rc::new);
+    if let Some(v) = &view {
+        let station = view::ViewStation::new(v.clone(), &config.world);
+        flight.link_ground(Box::new(station)).map_err(|_| {
+            CliError(
+                "--view needs a scenario flown by the onboard stack; the test pilot has no \
+                 ground link (use --controller pid)"
+                    .into(),
+            )
+        })?;
+    }
     let linked = ground::link(&args.ground, &mut flight)?;
     // Every check has passed: from here on the run starts, so the files may be staged.
     let logs = args.out.as_deref().map(SensorLogs::create).transpose()?;
@@ -319,6 +335,9 @@ pub fn run(args: SimArgs) -> CliResult {
         return Err(CliError(format!("writing outputs: {e}")));
     }
     let mut summary = summary(&args, &config, &report, wall_s);
+    if let Some(v) = &view {
+        summary["view"] = view_args::summary(v);
+    }
     if let (Some(log), Some(score)) = (&report.onboard, &report.score.onboard) {
         onboard::extend_summary(&mut summary, &args.closed_loop, &config, log, score);
         if let Some(dir) = args.out.as_deref() {

@@ -122,3 +122,28 @@ pub fn socat_pair(dir: &Path, test: &str) -> Option<Socat> {
     }
     Some(socat)
 }
+
+/// Runs a real-client test script (`tests/...`, relative to the repository) with the Python of
+/// the repository's `.venv` and `args`; fails with its output unless it passes. `needs` says
+/// what scripts/setup.sh installs for it, for the message when the venv is missing.
+pub fn venv_script(script: &str, args: &[&str], needs: &str) {
+    let python = Path::new(REPO).join(".venv/bin/python");
+    assert!(
+        python.is_file(),
+        "{} is missing: run scripts/setup.sh to install {needs}",
+        python.display()
+    );
+    let out = Command::new(&python)
+        .arg(Path::new(REPO).join(script))
+        .args(args)
+        .output()
+        .expect("start python");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    println!("{stdout}");
+    assert!(
+        out.status.success(),
+        "{script} {args:?} failed ({}):\n{stdout}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
