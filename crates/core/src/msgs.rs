@@ -248,6 +248,34 @@ pub enum FailsafeReason {
     LinkLost,
 }
 
+impl FailsafeReason {
+    /// The failsafe's name in summaries and logs.
+    pub const fn name(self) -> &'static str {
+        match self {
+            FailsafeReason::LidarLost => "lidar_lost",
+            FailsafeReason::EstimateInvalid => "estimate_invalid",
+            FailsafeReason::BatteryLow => "battery_low",
+            FailsafeReason::BatteryCritical => "battery_critical",
+            FailsafeReason::KillSwitch => "kill_switch",
+            FailsafeReason::CompanionLost => "companion_lost",
+            FailsafeReason::LinkLost => "link_lost",
+        }
+    }
+
+    /// The failsafe in words, for a person (ground-station texts, the web view).
+    pub const fn text(self) -> &'static str {
+        match self {
+            FailsafeReason::LidarLost => "lidar lost",
+            FailsafeReason::EstimateInvalid => "estimate invalid",
+            FailsafeReason::BatteryLow => "battery low",
+            FailsafeReason::BatteryCritical => "battery critical",
+            FailsafeReason::KillSwitch => "kill switch",
+            FailsafeReason::CompanionLost => "companion lost",
+            FailsafeReason::LinkLost => "ground link lost",
+        }
+    }
+}
+
 /// Everything the vehicle hands the autopilot for one step.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Inputs {

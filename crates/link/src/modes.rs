@@ -81,19 +81,6 @@ pub fn system_status(mode: FlightMode, failsafe: Option<FailsafeReason>) -> MavS
     }
 }
 
-/// A short description of a failsafe for STATUSTEXT.
-pub fn failsafe_text(reason: FailsafeReason) -> &'static str {
-    match reason {
-        FailsafeReason::LidarLost => "lidar lost",
-        FailsafeReason::EstimateInvalid => "estimate invalid",
-        FailsafeReason::BatteryLow => "battery low",
-        FailsafeReason::BatteryCritical => "battery critical",
-        FailsafeReason::KillSwitch => "kill switch",
-        FailsafeReason::CompanionLost => "companion lost",
-        FailsafeReason::LinkLost => "ground link lost",
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -18,7 +18,7 @@
 //! periods, so a 50 Hz stream sent from a 200 Hz loop goes out exactly every fourth step and
 //! a late step does not make a burst.
 
-use crate::modes::{base_mode, custom_mode, failsafe_text, system_status};
+use crate::modes::{base_mode, custom_mode, system_status};
 use crate::ned::{flip_euler, flip_yz};
 use crate::obstacle::{obstacle_distance, ObstacleRange};
 use crate::odometry::odometry_from_estimate;
@@ -200,7 +200,7 @@ impl Telemetry {
             if let Some(reason) = out.failsafe {
                 send(&statustext_of(
                     MavSeverity::MAV_SEVERITY_CRITICAL,
-                    &["failsafe: ", failsafe_text(reason)],
+                    &["failsafe: ", reason.text()],
                 ));
             }
             self.last_failsafe = out.failsafe;

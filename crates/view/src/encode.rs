@@ -2,7 +2,7 @@
 //! a few hundred thousand cells compresses to a few kilobytes, and the browser decodes it).
 
 use crate::snapshot::{OccupancyImage, Snapshot};
-use plumbline_core::msgs::{FailsafeReason, FlightMode};
+use plumbline_core::msgs::FailsafeReason;
 use serde::Serialize;
 
 /// One state frame (`"type": "state"`).
@@ -41,31 +41,6 @@ struct HelloMessage<'a> {
     trail_m: &'a [f32],
 }
 
-pub fn mode_name(m: FlightMode) -> &'static str {
-    match m {
-        FlightMode::Disarmed => "Disarmed",
-        FlightMode::Takeoff => "Takeoff",
-        FlightMode::Hold => "Hold",
-        FlightMode::Explore => "Explore",
-        FlightMode::Return => "Return",
-        FlightMode::Land => "Land",
-        FlightMode::Manual => "Manual",
-        FlightMode::Killed => "Killed",
-    }
-}
-
-fn failsafe_name(f: FailsafeReason) -> &'static str {
-    match f {
-        FailsafeReason::LidarLost => "lidar lost",
-        FailsafeReason::EstimateInvalid => "estimate invalid",
-        FailsafeReason::BatteryLow => "battery low",
-        FailsafeReason::BatteryCritical => "battery critical",
-        FailsafeReason::KillSwitch => "kill switch",
-        FailsafeReason::CompanionLost => "companion lost",
-        FailsafeReason::LinkLost => "ground link lost",
-    }
-}
-
 /// A JSON number must be finite: a diverged estimate is sent as 0 with `valid` false.
 fn finite(v: f64) -> f64 {
     if v.is_finite() {
@@ -91,8 +66,8 @@ pub fn state(seq: u64, s: &Snapshot) -> String {
         valid: s.estimate_valid && s.pose.iter().all(|v| v.is_finite()),
         scan_cm,
         battery_v: s.battery_v.filter(|v| v.is_finite()),
-        mode: mode_name(s.mode),
-        failsafe: s.failsafe.map(failsafe_name),
+        mode: s.mode.name(),
+        failsafe: s.failsafe.map(FailsafeReason::text),
     };
     serde_json::to_string(&msg).unwrap_or_default()
 }
@@ -146,6 +121,7 @@ fn png(m: &OccupancyImage) -> Option<Vec<u8>> {
 mod tests {
     use super::*;
     use crate::snapshot::{FREE, OCCUPIED};
+    use plumbline_core::msgs::FlightMode;
 
     #[test]
     fn a_map_round_trips_through_png_upside_down() {
@@ -201,7 +177,7 @@ mod tests {
         assert_eq!(v["pose"][0], 0.0);
         assert_eq!(v["scan_cm"], serde_json::json!([1, -200]));
         assert!(v["battery_v"].is_null());
-        assert_eq!(v["mode"], "Land");
+        assert_eq!(v["mode"], "land");
         assert_eq!(v["failsafe"], "estimate invalid");
     }
 }

@@ -104,18 +104,6 @@ impl ClosedLoopArgs {
     }
 }
 
-fn failsafe_name(r: FailsafeReason) -> &'static str {
-    match r {
-        FailsafeReason::LidarLost => "lidar_lost",
-        FailsafeReason::EstimateInvalid => "estimate_invalid",
-        FailsafeReason::BatteryLow => "battery_low",
-        FailsafeReason::BatteryCritical => "battery_critical",
-        FailsafeReason::KillSwitch => "kill_switch",
-        FailsafeReason::CompanionLost => "companion_lost",
-        FailsafeReason::LinkLost => "link_lost",
-    }
-}
-
 fn fallback_name(r: FallbackReason) -> &'static str {
     match r {
         FallbackReason::NonFinite => "non_finite",
@@ -160,7 +148,7 @@ pub fn extend_summary(
         "adaptive_fallback": log.adaptive_fallback.map(|(t_s, reason)| {
             json!({ "t_s": t_s, "reason": fallback_name(reason) })
         }),
-        "failsafe": log.failsafe.map(failsafe_name),
+        "failsafe": log.failsafe.map(FailsafeReason::name),
         "rejected_points": log.rejected_points,
         "modes": modes,
     });
