@@ -133,7 +133,7 @@ fn the_stream_carries_the_map_once_and_the_state_as_it_changes() {
     let first = next_text(&mut ws);
     assert_eq!(
         (first["type"].as_str(), first["mode"].as_str()),
-        (Some("state"), Some("Hold"))
+        (Some("state"), Some("hold"))
     );
     assert_eq!(first["scan_cm"], serde_json::json!([300, 100, 100, 400]));
     // A new state with the same map: the state comes, the map does not again.
@@ -263,5 +263,5 @@ fn the_last_state_reaches_the_clients_when_the_view_stops() {
             seen.push(v["mode"].as_str().unwrap_or_default().to_string());
         }
     }
-    assert_eq!(seen.last().map(String::as_str), Some("Killed"), "{seen:?}");
+    assert_eq!(seen.last().map(String::as_str), Some("killed"), "{seen:?}");
 }
