@@ -10,6 +10,16 @@ use plumbline_sim::sensors::lidar::LidarProfile;
 use plumbline_sim::vehicle::model_error::{ModelError, Payload, WeakMotor};
 use plumbline_sim::world::World;
 
+/// Mass x1.3 and motor 1 at 80 %: the model error of the tracking target.
+const HEAVY_AND_WEAK: ModelError = ModelError {
+    mass_scale: 1.3,
+    weak_motor: Some(WeakMotor {
+        index: 0,
+        factor: 0.8,
+    }),
+    ..ModelError::NONE
+};
+
 /// Keeps the true state samples.
 #[derive(Default)]
 struct States(Vec<StateSample>);
@@ -188,14 +198,7 @@ fn the_pid_stack_follows_the_square() {
 fn a_heavy_vehicle_with_a_weak_motor_flies_the_square_and_the_mrac_cancels_more() {
     let control_error = |controller| {
         let config = SimConfig {
-            model_error: ModelError {
-                mass_scale: 1.3,
-                weak_motor: Some(WeakMotor {
-                    index: 0,
-                    factor: 0.8,
-                }),
-                ..ModelError::NONE
-            },
+            model_error: HEAVY_AND_WEAK,
             ..calm_hall(LidarProfile::utm30lx())
         };
         let options = Options {
@@ -224,14 +227,7 @@ fn a_heavy_vehicle_with_a_weak_motor_flies_the_square_and_the_mrac_cancels_more(
 #[test]
 fn a_heavy_vehicle_with_a_weak_motor_is_in_the_air_when_its_take_off_ends() {
     let config = SimConfig {
-        model_error: ModelError {
-            mass_scale: 1.3,
-            weak_motor: Some(WeakMotor {
-                index: 0,
-                factor: 0.8,
-            }),
-            ..ModelError::NONE
-        },
+        model_error: HEAVY_AND_WEAK,
         ..SimConfig::new(
             World::shipped("hall").unwrap().unwrap(),
             LidarProfile::utm30lx(),
