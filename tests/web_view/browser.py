@@ -10,6 +10,10 @@ CASE `commands`: served with a token; a command with a wrong token is refused an
 nothing; the kill button with the right token stops the motors (mode Killed on the page and
 last in the flight's summary).
 
+CASE `companion`: `plumbline companion --view` replays the bundled XV-11 capture at its own pace
+into a UDP socket this script holds; the read-only page shows the SLAM's map and pose, its time
+advances, and the mode (which only the autopilot knows) shows as unknown.
+
 CASE `screenshot`: saves the page during an exploration flight as --png (default
 docs/web-view.png, the README's picture); run from the repository root.
 
@@ -18,8 +22,10 @@ Loopback only. Every wait is bounded; on any failure the script exits non-zero w
 
 import argparse
 import json
+import pathlib
 import re
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -46,6 +52,7 @@ SIM_ARGS = ["sim", "--scenario", "hold", "--world", "office", "--duration", "300
 SCREENSHOT_ARGS = ["sim", "--scenario", "explore", "--world", "room", "--seed", "1",
                    "--realtime", "5", "--json"]
 SCREENSHOT_AT_S = 35.0
+CAPTURE = pathlib.Path(__file__).resolve().parents[2] / "data/captures/neato-xv11/hand_in_box.bin"
 WAIT_S = 60.0
 
 
@@ -161,6 +168,30 @@ def read_only(browser, plumbline):
         sim.stop()
 
 
+def companion(browser, plumbline):
+    # The autopilot's end of the link: a socket that takes the ODOMETRY and never answers.
+    autopilot = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    autopilot.bind(("127.0.0.1", 0))
+    port = autopilot.getsockname()[1]
+    args = ["companion", "--lidar", "xv11", "--replay", str(CAPTURE), "--realtime",
+            "--mavlink", f"udpout:127.0.0.1:{port}", "--json"]
+    run = Sim(plumbline, [], args)
+    try:
+        page = open_page(browser, run.url)
+        wait_until("the map", lambda: page.get_attribute("body", "data-map-version"))
+        t0 = sim_time(page)
+        wait_until("the time to advance", lambda: sim_time(page) > t0 + 1.0)
+        if text(page, "#mode") != "-":
+            fail(f"the companion's view shows a mode it cannot know: {text(page, '#mode')!r}")
+        if page.locator("#controls").is_visible():
+            fail("the companion's view shows command buttons")
+        print(f"companion: map {text(page, '#mapinfo')}, t {sim_time(page):.1f} s, "
+              f"pose {text(page, '#pose')}")
+    finally:
+        run.stop()
+        autopilot.close()
+
+
 def screenshot(browser, plumbline, path):
     """The README's picture: an exploration flight some way in."""
     sim = Sim(plumbline, [], SCREENSHOT_ARGS)
@@ -200,7 +231,7 @@ def commands(browser, plumbline):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("plumbline")
-    ap.add_argument("case", choices=["read-only", "commands", "screenshot"])
+    ap.add_argument("case", choices=["read-only", "commands", "companion", "screenshot"])
     ap.add_argument("--png", default="docs/web-view.png", help="where `screenshot` saves")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as profile, sync_playwright() as pw:
@@ -216,6 +247,8 @@ def main():
             read_only(browser, args.plumbline)
         elif args.case == "commands":
             commands(browser, args.plumbline)
+        elif args.case == "companion":
+            companion(browser, args.plumbline)
         else:
             screenshot(browser, args.plumbline, args.png)
         context.close()

@@ -14,6 +14,7 @@ mod sim;
 mod slam_cmd;
 mod study;
 mod view_args;
+mod view_feed;
 
 #[derive(Parser)]
 #[command(

@@ -1,4 +1,4 @@
-//! `plumbline sim --view` in a real browser: headless Chromium (Debian's `chromium`) driven by
+//! `plumbline sim --view` and `plumbline companion --view` in a real browser: headless Chromium (Debian's `chromium`) driven by
 //! Playwright from the repository's `.venv` (both installed by scripts/setup.sh), running
 //! tests/web_view/browser.py. Loopback only.
 
@@ -27,4 +27,9 @@ fn the_page_shows_the_map_and_a_moving_pose_read_only() {
 #[test]
 fn the_kill_button_needs_the_token_and_stops_the_motors() {
     browser("commands");
+}
+
+#[test]
+fn the_companion_serves_its_map_and_pose_read_only() {
+    browser("companion");
 }

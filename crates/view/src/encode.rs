@@ -2,7 +2,7 @@
 //! a few hundred thousand cells compresses to a few kilobytes, and the browser decodes it).
 
 use crate::snapshot::{OccupancyImage, Snapshot};
-use plumbline_core::msgs::FailsafeReason;
+use plumbline_core::msgs::{FailsafeReason, FlightMode};
 use serde::Serialize;
 
 /// One state frame (`"type": "state"`).
@@ -17,7 +17,7 @@ struct StateMessage<'a> {
     /// Scan hits as flat x, y pairs in centimetres: half the text of metres with decimals.
     scan_cm: Vec<i32>,
     battery_v: Option<f32>,
-    mode: &'a str,
+    mode: Option<&'a str>,
     failsafe: Option<&'a str>,
 }
 
@@ -66,7 +66,7 @@ pub fn state(seq: u64, s: &Snapshot) -> String {
         valid: s.estimate_valid && s.pose.iter().all(|v| v.is_finite()),
         scan_cm,
         battery_v: s.battery_v.filter(|v| v.is_finite()),
-        mode: s.mode.name(),
+        mode: s.mode.map(FlightMode::name),
         failsafe: s.failsafe.map(FailsafeReason::text),
     };
     serde_json::to_string(&msg).unwrap_or_default()
@@ -121,7 +121,6 @@ fn png(m: &OccupancyImage) -> Option<Vec<u8>> {
 mod tests {
     use super::*;
     use crate::snapshot::{FREE, OCCUPIED};
-    use plumbline_core::msgs::FlightMode;
 
     #[test]
     fn a_map_round_trips_through_png_upside_down() {
@@ -167,7 +166,7 @@ mod tests {
             estimate_valid: true,
             scan_m: vec![[0.011, -2.0], [f32::NAN, 1.0]],
             battery_v: Some(f32::NAN),
-            mode: FlightMode::Land,
+            mode: Some(FlightMode::Land),
             failsafe: Some(FailsafeReason::EstimateInvalid),
             ..Snapshot::default()
         };

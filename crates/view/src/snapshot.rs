@@ -52,7 +52,9 @@ pub struct Snapshot {
     pub scan_m: Vec<[f32; 2]>,
     /// Battery voltage, V, when one is known.
     pub battery_v: Option<f32>,
-    pub mode: FlightMode,
+    /// The flight mode; `None` where it is not known (a companion computer beside another
+    /// autopilot).
+    pub mode: Option<FlightMode>,
     pub failsafe: Option<FailsafeReason>,
     /// The map to draw under the vehicle; shared so publishing it again costs nothing.
     pub map: Option<Arc<OccupancyImage>>,

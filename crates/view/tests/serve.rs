@@ -25,7 +25,7 @@ fn snapshot(t_s: f64, map: Option<Arc<OccupancyImage>>) -> Snapshot {
         estimate_valid: true,
         scan_m: vec![[3.0, 1.0], [t_s as f32, 4.0]],
         battery_v: Some(11.9),
-        mode: FlightMode::Hold,
+        mode: Some(FlightMode::Hold),
         failsafe: None,
         map,
     }
@@ -253,7 +253,7 @@ fn the_last_state_reaches_the_clients_when_the_view_stops() {
     view.publish(snapshot(1.0, None));
     assert_eq!(next_text(&mut ws)["t_s"], 1.0);
     let mut last = snapshot(2.0, None);
-    last.mode = FlightMode::Killed;
+    last.mode = Some(FlightMode::Killed);
     view.publish(last);
     drop(view);
     let mut seen = Vec::new();

@@ -12,15 +12,21 @@ use crate::lidar_cmd::BAUD_RANGE;
 use crate::log_args::LogArgs;
 use crate::numeric::{within, Range};
 use crate::report::{print_summary, CliError, CliResult};
+use crate::view_args::{self, ViewArgs};
+use crate::view_feed::{Status, ViewFeed};
 use clap::{ArgGroup, Args};
 use pipeline::{AutopilotLink, Companion};
 use plumbline_io::link_port::{Endpoint, LinkPort};
 use plumbline_io::serial::{Device, RecordOptions};
 use plumbline_slam::{local_map_cells, Slam, SlamConfig};
+use plumbline_view::View;
 use serde_json::{json, Value};
 use source::{each_revolution, Pacer, Source, SourceEnd};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
+
+/// Half side of the web view's map around the start (m): a building's floor.
+const VIEW_MAP_HALF_SIDE_M: f64 = 50.0;
 
 /// A live run with no `--duration` lasts until the lidar stops (or the process is stopped).
 const FOREVER: Duration = Duration::from_secs(100 * 365 * 24 * 3600);
@@ -62,6 +68,8 @@ pub struct CompanionArgs {
     idle_timeout: f64,
     #[command(flatten)]
     log_args: LogArgs,
+    #[command(flatten)]
+    view: ViewArgs,
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
@@ -104,6 +112,13 @@ fn source(a: &CompanionArgs) -> Result<Source, CliError> {
 }
 
 pub fn run(a: CompanionArgs) -> CliResult {
+    if a.view.view_token.is_some() {
+        return Err(CliError(
+            "--view-token: the companion's view is read-only; arming, landing and the kill \
+             switch belong to the autopilot and its ground station"
+                .into(),
+        ));
+    }
     let source = source(&a)?;
     let live = matches!(source, Source::Port(_));
     let sysid = u8::try_from(a.sysid).map_err(|e| CliError(format!("--sysid: {e}")))?;
@@ -115,11 +130,15 @@ pub fn run(a: CompanionArgs) -> CliResult {
         .filter(|_| a.replay_log.is_none())
         .map_or(0.0, Device::min_range_m);
     let mut link = mavlink_out::MavlinkOut::new(port, sysid, min_range_m);
-    let mut summary = run_with(&source, live, a.realtime && !live, &mut link)?;
+    let view = a.view.start()?;
+    let mut summary = run_with(&source, live, a.realtime && !live, &mut link, view.as_ref())?;
     let c = link.port().counters();
     if let Value::Object(map) = &mut summary {
         map.insert("mavlink_bytes_sent".into(), c.sent_bytes.into());
         map.insert("mavlink_send_errors".into(), c.send_errors.into());
+        if let Some(v) = &view {
+            map.insert("view".into(), view_args::summary(v));
+        }
     }
     print_summary(&summary, a.json);
     // A lidar port that failed mid-run: the run up to then was sent and summarised, and the
@@ -131,12 +150,15 @@ pub fn run(a: CompanionArgs) -> CliResult {
 }
 
 /// The whole run over any link: a live port runs the SLAM backend on its own thread, as it
-/// must to keep up; a replay runs it inline so the same input gives the same output.
+/// must to keep up; a replay runs it inline so the same input gives the same output. With a
+/// `view`, each revolution's pose and scan go to the web view too (read-only: the companion
+/// knows no flight mode, battery or height).
 fn run_with<L: AutopilotLink>(
     source: &Source,
     live: bool,
     realtime: bool,
     link: L,
+    view: Option<&View>,
 ) -> Result<Value, CliError> {
     let wall = Instant::now();
     let config = SlamConfig::default();
@@ -144,9 +166,21 @@ fn run_with<L: AutopilotLink>(
     let slam = Slam::new(config, &mut cells, live).map_err(|e| CliError(e.0))?;
     let mut companion = Companion::new(slam, link);
     let mut span: Option<(f64, f64)> = None;
+    let mut feed = view.map(|_| ViewFeed::new(VIEW_MAP_HALF_SIDE_M));
     let end: SourceEnd = each_revolution(source, realtime.then(Pacer::new), |rec| {
         companion.revolution(rec)?;
         let t = rec.timestamp_s;
+        if let (Some(view), Some(feed), Some(fix)) = (view, &mut feed, companion.last_fix) {
+            let [x, y] = fix.position_m.map(f64::from);
+            let status = Status {
+                battery_v: None,
+                mode: None,
+                failsafe: None,
+            };
+            let pose = [x, y, 0.0, f64::from(fix.yaw_rad)];
+            let valid = fix.quality_pct.is_some();
+            feed.update(view, t, pose, valid, Some(companion.beams()), status);
+        }
         span = Some((span.map_or(t, |s| s.0), t));
         Ok(())
     })?;

@@ -141,6 +141,11 @@ impl<'m, L: AutopilotLink> Companion<'m, L> {
         Ok(())
     }
 
+    /// The revolution just sent, in the body frame.
+    pub fn beams(&self) -> &[Beam] {
+        self.scan.beams()
+    }
+
     pub fn resets(&self) -> Resets {
         self.fixes.resets
     }
