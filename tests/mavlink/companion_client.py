@@ -95,8 +95,13 @@ def main():
             fail(f"pose covariance {cov}")
         if min(cov[0], cov[6], cov[20]) <= 0.0:
             fail(f"x, y or yaw variance not positive: {cov}")
-        if not all(math.isnan(cov[i]) for i in (11, 15, 18)) or not math.isnan(m.z):
-            fail(f"height, roll or pitch claimed measured: z {m.z}, {cov}")
+        # PX4 drops a position with any NaN in it, ArduPilot pools the three variances of
+        # position and of attitude: the unmeasured height, roll and pitch go out finite, with
+        # the horizontal / yaw variance.
+        if not math.isfinite(m.z) or not all(math.isfinite(cov[i]) for i in (11, 15, 18)):
+            fail(f"a NaN in the pose: z {m.z}, {cov}")
+        if cov[11] != max(cov[0], cov[6]) or cov[15] != cov[20] or cov[18] != cov[20]:
+            fail(f"height, roll or pitch claimed better measured than x, y, yaw: {cov}")
         if m.quality == -1 and cov[0] < 100.0:
             fail(f"a lost pose claims {cov[0]} m^2")
         if not math.isnan(m.velocity_covariance[0]):

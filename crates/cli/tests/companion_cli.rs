@@ -109,11 +109,12 @@ fn the_capture_arrives_as_one_odometry_and_one_obstacle_message_per_revolution()
         let norm: f32 = o.q.iter().map(|v| v * v).sum();
         assert!((norm - 1.0).abs() < 1e-5 && o.q[1] == 0.0 && o.q[2] == 0.0);
         // x, y and yaw variances positive; what a 2-D lidar cannot see (height, roll, pitch)
-        // unknown.
+        // finite (an autopilot drops a pose with a NaN) and no better than what it sees.
         let c = &o.pose_covariance;
         assert!(c[0] > 0.0 && c[6] > 0.0 && c[20] > 0.0, "{c:?}");
+        assert!(o.z.is_finite() && c.iter().all(|v| v.is_finite()), "{c:?}");
         assert!(
-            o.z.is_nan() && c[11].is_nan() && c[15].is_nan() && c[18].is_nan(),
+            c[11] == c[0].max(c[6]) && c[15] == c[20] && c[18] == c[20],
             "{c:?}"
         );
         assert!(o.velocity_covariance[0].is_nan() && o.vx.is_nan());

@@ -19,14 +19,23 @@ fn unknown_covariance() -> [f32; 21] {
 /// companion's map, half-turned to FRD like every frame here), child frame MAV_FRAME_BODY_FRD
 /// (ArduPilot accepts no other pair), estimator VISION (PX4 refuses LIDAR).
 ///
-/// A 2-D lidar SLAM knows x, y and yaw. Height is the caller's (`height_m` above the map
-/// origin, e.g. from a rangefinder) or unknown: then z is NaN. Roll and pitch in the quaternion
-/// are zero and their variances, like the unknown height's, are NaN: the autopilot must take
-/// them from its own sensors (the README lists the parameters that make it). Velocities and
-/// rates are unknown (NaN, with NaN first in their covariance).
+/// A 2-D lidar SLAM knows x, y and yaw; what it does not know is sent finite anyway, because
+/// both autopilots throw away the whole message's part for one NaN: PX4 drops the position
+/// unless x, y and z are all finite, and ArduPilot pools the three position variances (and the
+/// three attitude variances) into one error, so a NaN in one poisons the others. So height is
+/// the caller's (`height_m` above the map origin, e.g. from a rangefinder) or 0, the map
+/// origin's, with the horizontal variance; roll and pitch in the quaternion are zero, with the
+/// yaw's variance. Neither autopilot fuses them when set up as the README says (PX4's external
+/// vision for horizontal position and yaw only, ArduPilot's height from its barometer; roll and
+/// pitch always from their own IMU), and the pooled error then stays the horizontal one.
+/// Velocities and rates are unknown (NaN, with NaN first in their covariance): both read them
+/// only when finite.
 pub fn odometry_from_pose_fix(fix: &PoseFix, height_m: Option<f32>) -> ODOMETRY_DATA {
-    let z_up = height_m.unwrap_or(f32::NAN);
-    let [x, y, z] = flip_yz([fix.position_m[0], fix.position_m[1], z_up]);
+    let [x, y, z] = flip_yz([
+        fix.position_m[0],
+        fix.position_m[1],
+        height_m.unwrap_or(0.0),
+    ]);
     let [roll, pitch, yaw] = flip_euler(0.0, 0.0, fix.yaw_rad);
     // (x, y, yaw) of the fix are pose components 0, 1 and 5.
     let axes = [0usize, 1, 5];
@@ -36,9 +45,13 @@ pub fn odometry_from_pose_fix(fix: &PoseFix, height_m: Option<f32>) -> ODOMETRY_
             cov[i][j] = fix.covariance[a][b];
         }
     }
-    cov[2][2] = if height_m.is_some() { 0.0 } else { f32::NAN };
-    cov[3][3] = f32::NAN;
-    cov[4][4] = f32::NAN;
+    cov[2][2] = if height_m.is_some() {
+        0.0
+    } else {
+        cov[0][0].max(cov[1][1])
+    };
+    cov[3][3] = cov[5][5];
+    cov[4][4] = cov[5][5];
     let covariance_known = fix.covariance.iter().flatten().all(|c| c.is_finite());
     ODOMETRY_DATA {
         time_usec: usec(fix.t_s),
@@ -149,7 +162,8 @@ mod tests {
         };
         let o = odometry_from_pose_fix(&fix, None);
         assert_eq!((o.x, o.y), (1.0, -2.0));
-        assert!(o.z.is_nan() && o.vx.is_nan());
+        // Height unknown: the map origin's, with the horizontal variance.
+        assert!(o.z == 0.0 && o.vx.is_nan());
         assert_eq!(o.time_usec, 2_500_000);
         assert_eq!(o.frame_id, MavFrame::MAV_FRAME_LOCAL_FRD);
         assert_eq!(o.child_frame_id, MavFrame::MAV_FRAME_BODY_FRD);
@@ -165,7 +179,16 @@ mod tests {
         assert_eq!(o.pose_covariance[6], 0.04);
         assert_eq!(o.pose_covariance[20], 0.0009);
         assert_eq!(o.pose_covariance[5], -0.001);
-        assert!(o.pose_covariance[11].is_nan(), "unknown height variance");
+        assert_eq!(
+            o.pose_covariance[11], 0.04,
+            "unknown height: the horizontal variance"
+        );
+        // Roll and pitch are not measured: the yaw's variance, finite for ArduPilot's pooling.
+        assert_eq!(
+            (o.pose_covariance[15], o.pose_covariance[18]),
+            (0.0009, 0.0009)
+        );
+        assert!(o.pose_covariance.iter().all(|c| c.is_finite()));
         assert!(o.velocity_covariance[0].is_nan());
         let lost = PoseFix {
             quality_pct: None,
