@@ -38,5 +38,6 @@ pub use mavlink::dialects::common;
 pub use obstacle::{obstacle_distance, sector_of, ObstacleRange, SECTORS};
 pub use odometry::{odometry_from_estimate, odometry_from_pose_fix};
 pub use params::{ParamName, ParamRef, ParamRequest, ParameterStore, NAME_LEN};
+pub use scanner::frame_span;
 pub use signing::{timestamp_from_unix, SigningKey};
 pub use telemetry::{SensorRanges, TelemetryInput, TelemetryRates};

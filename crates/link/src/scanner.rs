@@ -120,6 +120,22 @@ fn judge(bytes: &[u8], counters: &mut DropCounters) -> Candidate {
     }
 }
 
+/// The length and message id of the MAVLink 2 frame at the start of `bytes`, as this link
+/// writes them, or `None` when no whole frame starts there: a caller packing the link's
+/// output into datagrams keeps every frame whole. Reads the layout only, not the checksum.
+pub fn frame_span(bytes: &[u8]) -> Option<(usize, u32)> {
+    if bytes.len() < 1 + V2_HEADER || bytes[0] != STX_V2 {
+        return None;
+    }
+    let signature = if bytes[2] & IFLAG_SIGNED != 0 {
+        SIGNATURE_LEN
+    } else {
+        0
+    };
+    let len = 1 + V2_HEADER + usize::from(bytes[1]) + 2 + signature;
+    (len <= bytes.len()).then(|| (len, message_id(bytes, true)))
+}
+
 fn message_id(bytes: &[u8], v2: bool) -> u32 {
     if v2 {
         u32::from_le_bytes([bytes[7], bytes[8], bytes[9], 0])

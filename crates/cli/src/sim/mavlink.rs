@@ -19,8 +19,8 @@ use plumbline_io::input::read_text;
 use plumbline_io::link_port::{Endpoint, LinkPort, PortCounters};
 use plumbline_link::common::MavMessage;
 use plumbline_link::{
-    AckTo, DropCounters, InboundEvent, Link, LinkConfig, LinkTime, ParameterStore, SigningKey,
-    TelemetryInput,
+    frame_span, AckTo, DropCounters, InboundEvent, Link, LinkConfig, LinkTime, ParameterStore,
+    SigningKey, TelemetryInput,
 };
 use plumbline_sim::runner::ground::{GroundStation, Parameters, VehicleReport};
 use serde_json::{json, Value};
@@ -281,7 +281,7 @@ impl MavlinkStation {
             let mut len = 0;
             let mut ids = [0u32; 32];
             let mut n = 0;
-            while let Some((frame_len, id)) = frame_at(&rest[len..]) {
+            while let Some((frame_len, id)) = frame_span(&rest[len..]) {
                 if len > 0 && (len + frame_len > MAX_DATAGRAM || n == ids.len()) {
                     break;
                 }
@@ -306,20 +306,6 @@ impl MavlinkStation {
         stats.port = self.port.counters();
         stats.refused = *self.link.counters();
     }
-}
-
-/// The length and message id of the MAVLink 2 frame at the start of `bytes`.
-fn frame_at(bytes: &[u8]) -> Option<(usize, u32)> {
-    const HEADER: usize = 10;
-    const CHECKSUM: usize = 2;
-    const SIGNATURE: usize = 13;
-    if bytes.len() < HEADER || bytes[0] != 0xFD {
-        return None;
-    }
-    let signed = bytes[2] & 1 != 0;
-    let len = HEADER + usize::from(bytes[1]) + CHECKSUM + if signed { SIGNATURE } else { 0 };
-    let id = u32::from_le_bytes([bytes[7], bytes[8], bytes[9], 0]);
-    (len <= bytes.len()).then_some((len, id))
 }
 
 fn message_name(id: u32) -> &'static str {
