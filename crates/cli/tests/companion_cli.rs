@@ -15,6 +15,18 @@ use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 use support::{capture, excerpt, last_json, p, run, scratch, socat_pair, stderr, Socat, BIN, REPO};
 
+/// A loopback socket whose buffer holds a whole replay: the companion sends a log's poses as
+/// fast as it decodes them, and on a loaded machine this test may not be scheduled to drain
+/// the default 208 KB before the kernel drops datagrams (the kernel caps the size at its
+/// `rmem_max`).
+fn receiver() -> UdpSocket {
+    let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+    socket2::SockRef::from(&socket)
+        .set_recv_buffer_size(4 << 20)
+        .unwrap();
+    socket
+}
+
 /// What one run sent, decoded, with its summary.
 struct Received {
     summary: serde_json::Value,
@@ -27,7 +39,7 @@ struct Received {
 /// Runs the companion with `input` sending to a fresh loopback socket, and decodes every
 /// datagram that arrived while it ran.
 fn companion(input: &[&str]) -> Received {
-    let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let socket = receiver();
     socket
         .set_read_timeout(Some(Duration::from_millis(200)))
         .unwrap();
@@ -244,7 +256,7 @@ fn live(
 ) -> Option<Output> {
     let dir = scratch(test);
     let socat = socat_pair(&dir, test)?;
-    let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let socket = receiver();
     let to = format!("udpout:{}", socket.local_addr().unwrap());
     let child = Command::new(BIN)
         .args(["companion", "--lidar", "xv11", "--port", p(&socat.b)])
