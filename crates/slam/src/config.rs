@@ -80,9 +80,9 @@ pub struct LoopConfig {
     /// The candidate's neighbours on each side that join it in the reference of the search
     /// (a 180° scan alone may see too little of a place seen from elsewhere)…
     pub reference_neighbours: usize,
-    /// …and when the new keyframe faces more than a right angle away from the candidate: it
-    /// sees the walls the old path approached from, held by keyframes farther along it (2-16
-    /// all served on the benchmark logs; 6 gave MIT 0.0274 m, Intel 0.0176 m).
+    /// …and the keyframes before it that join when the new keyframe faces more than a right
+    /// angle away from the candidate: it sees what the old path saw ahead on its way there
+    /// (6-16 all served on the benchmark logs: MIT 0.0272-0.0274 m, Intel 0.0177-0.0181 m).
     pub reference_neighbours_opposite: usize,
     /// Coarse search before the ICL check: the window around the graph's guess is the drift
     /// the tracker may have gathered since the candidate (a floor plus a share of the distance
@@ -127,7 +127,7 @@ impl Default for LoopConfig {
             max_correction_m: 0.2,
             max_correction_rad: 0.1,
             reference_neighbours: 2,
-            reference_neighbours_opposite: 6,
+            reference_neighbours_opposite: 10,
             correlative: CorrelativeConfig::default(),
             window_floor_m: 0.3,
             window_max_m: 1.5,
