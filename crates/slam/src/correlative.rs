@@ -575,6 +575,75 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        /// With a motion prior too, pruning never loses the best penalised pose, and the score
+        /// returned is the pose's own fit.
+        #[test]
+        fn branch_and_bound_with_a_prior_equals_exhaustive_search(
+            x in -0.5f32..0.5, y in -0.5f32..0.5, t in -0.3f32..0.3, levels in 2usize..7,
+            per_m2 in 0.0f32..5.0, per_rad2 in 0.0f32..2.0,
+        ) {
+            let cfg = CorrelativeConfig::default();
+            let reference = room();
+            let truth = Pose2::new(x, y, t);
+            let current: Vec<Vec2> = reference
+                .iter()
+                .map(|&p| truth.inverse().transform(p))
+                .collect();
+            let window = Window {
+                translation_m: 0.6,
+                heading_rad: 0.35,
+            };
+            let prior = MotionPrior { per_m2, per_rad2 };
+            let guess = Pose2::new(0.1, -0.1, 0.05);
+            let pruned = LookupGrid::new(&reference, 0.2, &cfg, levels)
+                .search_near(&current, guess, window, prior, 0.0, &cfg);
+            let exhaustive = LookupGrid::new(&reference, 0.2, &cfg, 1)
+                .search_near(&current, guess, window, prior, 0.0, &cfg);
+            proptest::prop_assert_eq!(pruned, exhaustive);
+            let grid = LookupGrid::new(&reference, 0.2, &cfg, 1);
+            let found = pruned.unwrap();
+            let own = grid.score_pose(&current, found.pose, &cfg);
+            proptest::prop_assert!((own - found.score).abs() < 1e-3, "{own} vs {found:?}");
+        }
+    }
+
+    #[test]
+    fn along_a_featureless_corridor_the_prior_keeps_the_guess() {
+        let cfg = CorrelativeConfig::default();
+        // Two walls 2 m apart, 20 m long; the scan moved 0.7 m along them.
+        let reference: Vec<Vec2> = (0..400)
+            .flat_map(|i| {
+                let x = i as f32 * 0.05 - 10.0;
+                [Vec2::new(x, 1.0), Vec2::new(x, -1.0)]
+            })
+            .collect();
+        let truth = Pose2::new(0.7, 0.0, 0.0);
+        let current: Vec<Vec2> = reference
+            .iter()
+            .filter(|p| p.x.abs() < 6.0)
+            .map(|&p| truth.inverse().transform(p))
+            .collect();
+        let grid = LookupGrid::new(&reference, 1.0, &cfg, 5);
+        let window = Window {
+            translation_m: 1.5,
+            heading_rad: 0.3,
+        };
+        // The guess is right along the corridor and off across it and in heading.
+        let guess = Pose2::new(0.7, 0.25, 0.04);
+        let prior = MotionPrior {
+            per_m2: 0.5,
+            per_rad2: 0.5,
+        };
+        let found = grid
+            .search_near(&current, guess, window, prior, 0.3, &cfg)
+            .expect("a pose");
+        let (shift, turn) = found.pose.distance_to(truth);
+        assert!(shift <= 1.5 * cfg.resolution_m && turn < 0.02, "{found:?}");
+        assert!(found.score > 0.8, "{found:?}");
+    }
+
     #[test]
     fn nothing_above_the_threshold_is_none_and_empty_input_is_none() {
         let cfg = CorrelativeConfig::default();
