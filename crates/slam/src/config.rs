@@ -157,12 +157,27 @@ pub struct GuardConfig {
     pub correlative: CorrelativeConfig,
     /// A guess whose points' mean likelihood against the keyframe is at least this is kept.
     pub min_guess_score: f32,
-    /// Otherwise the window searched around it, m and rad…
+    /// Otherwise a window is searched around it: at least this wide, m and rad…
     pub window_m: f32,
     pub window_rad: f32,
-    /// …and a pose found there replaces it if it scores at least this…
+    /// …and at most `max_step_m` (the largest move between two scans it can find; full
+    /// heading is always allowed), widened to three times the spread below.
+    pub max_step_m: f32,
+    /// How far the motion may stray from the last one repeated: a floor plus half this
+    /// acceleration times the square of the time since the last matched scan, m/s² and rad/s².
+    /// Over a long gap the repeated motion says little, so the window grows and the penalty
+    /// for leaving the guess fades.
+    pub sigma_floor_m: f32,
+    pub accel_m_s2: f32,
+    pub sigma_floor_rad: f32,
+    pub turn_accel_rad_s2: f32,
+    /// Score lost by a pose one spread away from the guess (the penalty is quadratic): along
+    /// a corridor a 180° lidar sees the same walls wherever it stands, or looking back the way
+    /// it came, and only the motion tells those poses apart.
+    pub prior_weight: f32,
+    /// A pose found replaces the guess if it scores at least this…
     pub min_found_score: f32,
-    /// …and this many times the guess's score.
+    /// …and this many times the guess's score (the scores are the fit's own, unpenalised).
     pub min_gain: f32,
 }
 
@@ -173,7 +188,13 @@ impl Default for GuardConfig {
             correlative: CorrelativeConfig::default(),
             min_guess_score: 0.3,
             window_m: 1.0,
-            window_rad: std::f32::consts::PI,
+            window_rad: 0.5,
+            max_step_m: 2.5,
+            sigma_floor_m: 0.1,
+            accel_m_s2: 1.0,
+            sigma_floor_rad: 0.1,
+            turn_accel_rad_s2: 2.0,
+            prior_weight: 0.02,
             min_found_score: 0.35,
             min_gain: 1.5,
         }
