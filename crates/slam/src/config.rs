@@ -70,9 +70,10 @@ pub struct LoopConfig {
     /// Drift allowance per metre travelled since the candidate, m/m.
     pub drift_per_m: f32,
     /// At most this many candidates are verified per keyframe (the nearest first): bounded work
-    /// per scan. One against two on the benchmark logs: MIT 0.0275 against 0.0274 m, Intel
-    /// 0.0182 against 0.0177 m, at half the searches, which keeps the whole-log speed now that
-    /// candidates facing the other way are searched too.
+    /// per scan. One against two on the benchmark logs: MIT 0.0276 against 0.0273 m, Intel
+    /// 0.0182 against 0.0180 m, at about half the searches, which keeps the whole-log speed now
+    /// that candidates facing the other way are searched too (Intel thinned to every 4th scan
+    /// pays for it: 0.113 against 0.076 m).
     pub max_candidates: usize,
     /// Submaps younger than this (counting the current one) are not searched: the local map
     /// already ties the keyframe to them.
@@ -82,9 +83,10 @@ pub struct LoopConfig {
     /// The candidate's neighbours on each side that join it in the reference of the search
     /// (a 180° scan alone may see too little of a place seen from elsewhere)…
     pub reference_neighbours: usize,
-    /// …and the keyframes before it that join when the new keyframe faces more than a right
-    /// angle away from the candidate: it sees what the old path saw ahead on its way there
-    /// (6 and 10 gave MIT 0.0275 and 0.0272 m, Intel 0.0182 and 0.0179 m; 6 searches faster).
+    /// …and on each side when the new keyframe faces more than a right angle away from the
+    /// candidate: it sees what the old path saw on its way to and from there, not what the
+    /// candidate saw (with two candidates a keyframe, 6 against 2 gave MIT 0.0273 against
+    /// 0.0279 m, Intel 0.0180 against 0.0177 m).
     pub reference_neighbours_opposite: usize,
     /// Coarse search before the ICL check: the window around the graph's guess is the drift
     /// the tracker may have gathered since the candidate (a floor plus a share of the distance

@@ -178,15 +178,15 @@ impl<const N: usize> LoopCloser<N> {
         guess: Pose2,
     ) -> Result<Coarse, Rejection> {
         let cfg = &self.config;
-        // Passing the other way, the new keyframe faces what the old path approached the
-        // candidate through: the walls the keyframes before it saw ahead of them.
-        let before = if guess.theta.abs() > core::f32::consts::FRAC_PI_2 {
+        // Passing the other way, the new keyframe faces what the old path saw on its way to
+        // and from the candidate, held by keyframes farther from it.
+        let neighbours = if guess.theta.abs() > core::f32::consts::FRAC_PI_2 {
             cfg.reference_neighbours_opposite
         } else {
             cfg.reference_neighbours
         };
-        let first = from.saturating_sub(before);
-        let last = (from + cfg.reference_neighbours).min(to.saturating_sub(1));
+        let first = from.saturating_sub(neighbours);
+        let last = (from + neighbours).min(to.saturating_sub(1));
         let mut reference: Vec<Vec2> = Vec::new();
         for k in (first..=last).filter(|&k| keyframes[k].has_scan()) {
             let into_from = poses[from].between(poses[k]);
