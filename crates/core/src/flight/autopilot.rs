@@ -412,8 +412,11 @@ impl Autopilot {
                     c.descent_m_s
                 };
                 // After the lidar is lost the IMU-only estimate drifts faster than its
-                // covariance admits (biases and tilt are no longer observed): land level.
-                let horizontal = if failsafe == Some(FailsafeReason::LidarLost) {
+                // covariance admits (biases and tilt are no longer observed): land level, also
+                // when the estimate went invalid first and named the failsafe.
+                let lidar_lost = failsafe == Some(FailsafeReason::LidarLost)
+                    || self.supervisor.lidar_silent(t_s);
+                let horizontal = if lidar_lost {
                     Horizontal::Unknown
                 } else {
                     self.estimator.horizontal()

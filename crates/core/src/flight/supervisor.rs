@@ -171,6 +171,11 @@ impl Supervisor {
         self.hold_height_m
     }
 
+    /// No scan match accepted for longer than the lidar timeout, at `t_s`.
+    pub fn lidar_silent(&self, t_s: f64) -> bool {
+        (t_s - self.last_scan_t_s) as f32 > self.config.lidar_timeout_s
+    }
+
     /// New thresholds and timings, keeping every timer and latch.
     pub fn retune(&mut self, config: SupervisorConfig) {
         self.config = config;
@@ -328,7 +333,7 @@ impl Supervisor {
             return true;
         }
         let silent_s = (s.t_s - self.last_scan_t_s) as f32;
-        if silent_s > self.config.lidar_timeout_s {
+        if self.lidar_silent(s.t_s) {
             self.raise(s.t_s, FailsafeReason::LidarLost);
             return silent_s > self.config.lidar_timeout_s + self.config.lidar_hold_s;
         }
