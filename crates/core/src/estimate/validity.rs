@@ -78,7 +78,7 @@ impl Ekf {
         if largest <= bound {
             return Horizontal::Known;
         }
-        if !(smallest <= bound) {
+        if smallest > bound {
             return Horizontal::Unknown;
         }
         let along = [-across.y, across.x];
@@ -130,7 +130,7 @@ mod tests {
     #[test]
     fn a_corridor_along_a_diagonal_is_known_across_only() {
         // 2 m one-sigma along 30 degrees, 3 cm across, velocity 0.3 m/s along.
-        let angle = 0.5236f32;
+        let angle = core::f32::consts::FRAC_PI_6;
         let f = corridor(angle, 4.0, 9e-4, 0.09);
         assert!(!f.is_valid());
         let Horizontal::Across(a) = f.horizontal() else {
