@@ -102,7 +102,7 @@ impl Ekf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimate::ekf::EkfConfig;
+    use crate::estimate::ekf::{EkfConfig, Outcome, N};
 
     /// A filter whose position covariance is `along` (variance, m^2) along the unit direction
     /// at `angle_rad` and `across` across it, with velocity variance `velocity` along it.
@@ -157,6 +157,46 @@ mod tests {
         let far = corridor(0.0, 1.1 * p * 1.1 * p, 1e-3, 0.01);
         assert!(!far.horizontal().flyable_on_velocity());
         assert!(far.horizontal().across_axis().is_some());
+    }
+
+    #[test]
+    fn a_filter_that_sees_only_y_loses_x_and_keeps_y() {
+        use crate::estimate::attitude::Tilt;
+        use crate::estimate::imu::ImuStep;
+        use nalgebra::{SMatrix, SVector};
+        // Hovering level on the IMU, with position y measured at 5 Hz (a corridor along x).
+        let mut f = Ekf::new(EkfConfig::default());
+        let hover = ImuStep {
+            accel_m_s2: [0.0, 0.0, 9.81],
+            gyro_rad_s: [0.0; 3],
+            tilt: Tilt::LEVEL,
+        };
+        let mut h = SMatrix::<f32, 1, N>::zeros();
+        h[(0, ix::POS + 1)] = 1.0;
+        let r = SMatrix::<f32, 1, 1>::new(0.03 * 0.03);
+        let mut lost_at_s = None;
+        for step in 0..6000 {
+            f.predict(&hover, 0.005).unwrap();
+            if step % 40 == 0 {
+                assert_eq!(f.update(SVector::zeros(), h, r), Outcome::Accepted);
+            }
+            if lost_at_s.is_none() && !f.is_valid() {
+                lost_at_s = Some(step as f32 * 0.005);
+            }
+        }
+        // Known answer: y held at centimetres, x lost within the 30 s.
+        let lost_at_s = lost_at_s.expect("x is never observed");
+        let Horizontal::Across(a) = f.horizontal() else {
+            panic!("{:?}", f.horizontal());
+        };
+        assert!(a.across_axis[1].abs() > 0.999, "{a:?}");
+        assert!(a.across_std_m < 0.05, "{a:?}");
+        assert!(
+            a.along_std_m > EkfConfig::default().max_position_std_m,
+            "{a:?}"
+        );
+        // On the IMU alone the velocity along x is as lost as the position: not flyable.
+        assert!(!a.flyable, "{a:?}, invalid after {lost_at_s} s");
     }
 
     #[test]
