@@ -64,6 +64,8 @@ pub struct Movers {
     stamp_s: Option<f64>,
     /// The tracked mover's centre and velocity, world frame.
     track: Option<(Vec2, Vec2)>,
+    /// The side of its line of sight the vehicle is passing it on (see [`super::evade`]).
+    side: Option<f32>,
 }
 
 impl Default for Movers {
@@ -74,6 +76,7 @@ impl Default for Movers {
             origin: Vec2::ZERO,
             stamp_s: None,
             track: None,
+            side: None,
         }
     }
 }
@@ -99,31 +102,49 @@ impl Movers {
             .map(|t| (stamp_s - t) as f32)
             .filter(|dt| *dt > 0.0 && *dt <= MAX_GAP_S);
         let found = dt.and_then(|dt| self.most_urgent(sweep, pose, dt, cfg).map(|m| (m, dt)));
-        let mover = found.map(|(m, dt)| self.tracked(m, pose, dt, cfg));
+        let mover = match found {
+            Some((seen, dt)) => self.tracked(seen, pose, dt, cfg),
+            None => {
+                self.track = None;
+                None
+            }
+        };
         if mover.is_none() {
-            self.track = None;
+            self.side = None;
         }
         self.remember(sweep, pose, stamp_s);
         mover
     }
 
-    /// `seen` with its velocity from the track of its centre (the line-of-sight closing speed
-    /// when it is new), the track moved on.
-    fn tracked(&mut self, seen: Mover, pose: Pose2, dt: f32, cfg: &GuidanceConfig) -> Mover {
+    /// `seen` with its velocity from the track of its centre, once it was seen closing in on
+    /// the revolution before as well, near where it is now: a single revolution's closing
+    /// speed can be a wall's range noise or an estimate jump, two in a row at one place are
+    /// a mover. The track moves on either way.
+    fn tracked(&mut self, seen: Mover, pose: Pose2, dt: f32, cfg: &GuidanceConfig) -> Option<Mover> {
         let centre = pose.transform(seen.centre_m);
         let along_sight = pose.rotate(seen.unit * -seen.closing_m_s);
-        let velocity = match self.track {
-            Some((last, v)) if (centre - last).norm() <= cfg.mover_max_speed_m_s * dt => {
-                let raw = (centre - last) * (1.0 / dt);
-                v + (raw - v) * VELOCITY_SMOOTHING
-            }
-            _ => along_sight,
-        };
+        let confirmed = self
+            .track
+            .filter(|(last, _)| (centre - *last).norm() <= cfg.mover_max_speed_m_s * dt);
+        let velocity = confirmed.map_or(along_sight, |(last, v)| {
+            let raw = (centre - last) * (1.0 / dt);
+            v + (raw - v) * VELOCITY_SMOOTHING
+        });
         self.track = Some((centre, velocity));
-        Mover {
+        confirmed.map(|_| Mover {
             velocity_m_s: pose.inverse().rotate(velocity),
             ..seen
-        }
+        })
+    }
+
+    /// The side the tracked mover is being passed on, if one was taken.
+    pub fn side(&self) -> Option<f32> {
+        self.side
+    }
+
+    /// Remembers the side the tracked mover is passed on.
+    pub fn pass_on(&mut self, side: f32) {
+        self.side = Some(side);
     }
 
     /// Closing speed of each beam's hit (NaN where nothing matched), then the urgent mover.

@@ -157,7 +157,11 @@ impl<const S: usize> Guidance<S> {
         // A mover closing in is stepped aside from; walls still bind through the guard.
         let mover = self.movers.closing(&sweep, pose, now, &cfg);
         let limited = match &mover {
-            Some(m) => evade(m, limited, &sweep, recalled, &cfg),
+            Some(m) => {
+                let (v, side) = evade(m, limited, &sweep, recalled, &cfg, self.movers.side());
+                self.movers.pass_on(side);
+                v
+            }
             None => limited,
         };
         let (safe, guard) = guard_velocity(limited, &sweep, recalled, &cfg);
