@@ -33,9 +33,9 @@ const MISSING_BEAMS: f32 = 4.0;
 /// Least cosine of incidence at the last return: nearer grazing the wall may go on unseen.
 const MIN_INCIDENCE_COS: f32 = 0.25;
 /// A wall's direction at its end is taken over a chord at least this long, m, and at most
-/// this many beams.
+/// this many beams (a dense lidar's beams fall a few millimetres apart on a near wall).
 const WALL_CHORD_M: f32 = 0.15;
-const WALL_MAX_STEPS: usize = 12;
+const WALL_MAX_STEPS: usize = 64;
 /// Farthest a return may lie off that chord for the run to count as straight, m.
 const WALL_STRAIGHT_M: f32 = 0.05;
 /// Least cosine between the two ends' directions for them to be the same end.
@@ -126,6 +126,11 @@ fn wall_end_at<const N: usize>(
     let (j, j2) = (scan.neighbour(i, side)?, scan.neighbour(i, 2 * side)?);
     let p = scan.point(i);
     let on_wall = |d: Vec2| d.norm() <= cfg.line_neighbour_m;
+    // Where the next return lies on the wall nearby, the wall goes on (most points: checked
+    // first because it is cheap).
+    if on_wall(scan.point(j) - p) {
+        return None;
+    }
     let (out, spacing_m, beam_step) = wall_behind(scan, i, side, cfg)?;
     let range = p.norm();
     // A beam meeting the wall near grazing may be the last the lidar returns from it.
