@@ -48,6 +48,18 @@ pub struct GuidanceConfig {
     /// five revolutions of a 5 Hz lidar, long enough to pass a wall end that vanishes when seen
     /// edge-on, short enough that estimate drift and walking people leave no lasting ghosts.
     pub obstacle_memory_s: f32,
+    /// Slowest closing speed of a surface that is taken as a mover to sidestep, m/s. Default
+    /// 0.25 m/s: well above what estimate jitter and range noise make a wall appear to move
+    /// between revolutions (a few cm a revolution, averaged over five beams), under a slow walk.
+    pub mover_min_closing_m_s: f32,
+    /// Fastest a mover is believed to go, m/s: a hit further from every hit of the previous
+    /// revolution than this speed allows is a surface seen for the first time, not a mover.
+    /// Default 2.0 m/s: a brisk walk with room to spare.
+    pub mover_max_speed_m_s: f32,
+    /// A mover is sidestepped when it would reach `r_min` within this time, s. Default 3.0 s:
+    /// stepping `r_min` plus a person's half width across its way takes under 2 s at the speed
+    /// limit, and the rest covers the velocity loop's lag.
+    pub evade_horizon_s: f32,
     /// Narrowest opening taken as a gap to fly through, m. Default 1.0 m = 2 `r_min`. Must be
     /// wider than the vehicle (2 × radius): narrower openings are treated as wall.
     pub min_gap_width_m: f32,
@@ -88,6 +100,9 @@ impl Default for GuidanceConfig {
             waypoint_gain_1_s: 1.0,
             approach_rate_1_s: 1.0,
             obstacle_memory_s: 1.0,
+            mover_min_closing_m_s: 0.25,
+            mover_max_speed_m_s: 2.0,
+            evade_horizon_s: 3.0,
             min_gap_width_m: 1.0,
             line_tolerance_m: 0.05,
             max_point_spacing_m: 0.3,
@@ -127,7 +142,7 @@ impl GuidanceConfig {
     /// Checks every field; the first unusable one is returned.
     pub fn validate(&self) -> Result<(), GuidanceConfigError> {
         let positive = "finite and greater than 0";
-        let checks: [(&'static str, f32, bool, &'static str); 20] = [
+        let checks: [(&'static str, f32, bool, &'static str); 23] = [
             (
                 "vehicle_radius_m",
                 self.vehicle_radius_m,
@@ -194,6 +209,25 @@ impl GuidanceConfig {
                 self.obstacle_memory_s,
                 is_non_neg(self.obstacle_memory_s),
                 "finite and at least 0",
+            ),
+            (
+                "mover_min_closing_m_s",
+                self.mover_min_closing_m_s,
+                is_pos(self.mover_min_closing_m_s),
+                positive,
+            ),
+            (
+                "mover_max_speed_m_s",
+                self.mover_max_speed_m_s,
+                is_pos(self.mover_max_speed_m_s)
+                    && self.mover_max_speed_m_s >= self.mover_min_closing_m_s,
+                "finite and at least mover_min_closing_m_s",
+            ),
+            (
+                "evade_horizon_s",
+                self.evade_horizon_s,
+                is_non_neg(self.evade_horizon_s),
+                "finite and at least 0 (0 sidesteps no mover)",
             ),
             (
                 "min_gap_width_m",
@@ -289,6 +323,12 @@ mod tests {
         assert_eq!(bad(|c| c.min_segment_points = 1), "min_segment_points");
         assert_eq!(bad(|c| c.rule_sweep_rad = 7.0), "rule_sweep_rad");
         assert_eq!(bad(|c| c.obstacle_memory_s = -1.0), "obstacle_memory_s");
+        assert_eq!(
+            bad(|c| c.mover_min_closing_m_s = 0.0),
+            "mover_min_closing_m_s"
+        );
+        assert_eq!(bad(|c| c.mover_max_speed_m_s = 0.1), "mover_max_speed_m_s");
+        assert_eq!(bad(|c| c.evade_horizon_s = f32::NAN), "evade_horizon_s");
         assert_eq!(
             bad(|c| c.vehicle_radius_m = f32::INFINITY),
             "vehicle_radius_m"

@@ -23,11 +23,13 @@
 //! sector is measured only from the side that is seen.
 
 pub mod config;
+pub mod evade;
 pub mod field;
 pub mod gaps;
 pub mod guard;
 pub mod heading;
 mod memory;
+pub mod movers;
 pub mod prls;
 mod run;
 pub mod step;
@@ -36,5 +38,6 @@ mod sweep;
 pub use config::{GuidanceConfig, GuidanceConfigError};
 pub use guard::Guard;
 pub use heading::HeadingRule;
+pub use movers::Mover;
 pub use prls::{Gap, WallSegment, WallSegments};
 pub use step::{Decision, Guidance, GuidanceCommand, GuidanceMode, Outcome};

@@ -5,10 +5,12 @@
 //! [`Outcome`]: a scan with no usable beam, a non-finite pose, a non-finite waypoint.
 
 use super::config::{GuidanceConfig, GuidanceConfigError};
+use super::evade::evade;
 use super::field::{field_sum, FieldPart, FieldSum};
 use super::guard::{guard_velocity, Guard};
 use super::heading::{choose_heading, HeadingRule, SideClearance};
 use super::memory::NearMemory;
+use super::movers::{Mover, Movers};
 use super::prls::WallSegments;
 use super::sweep::Sweep;
 use crate::geom::{normalize_angle, Pose2, Vec2};
@@ -55,6 +57,8 @@ pub struct Decision {
     pub gain_m2_s: f32,
     /// True when the speed limit shortened the command.
     pub speed_limited: bool,
+    /// The mover sidestepped instead of what the rules asked (none closing in: `None`).
+    pub mover: Option<Mover>,
     /// What the clearance guard did.
     pub guard: Guard,
 }
@@ -77,6 +81,7 @@ pub struct Guidance<const S: usize> {
     cfg: GuidanceConfig,
     walls: WallSegments<S>,
     memory: NearMemory,
+    movers: Movers,
 }
 
 impl<const S: usize> Guidance<S> {
@@ -87,6 +92,7 @@ impl<const S: usize> Guidance<S> {
             cfg,
             walls: WallSegments::default(),
             memory: NearMemory::default(),
+            movers: Movers::default(),
         })
     }
 
@@ -145,9 +151,19 @@ impl<const S: usize> Guidance<S> {
                 (v, yaw, outcome, sides, false)
             }
         };
-        let (limited, speed_limited) = limit_speed(wish_body, cfg.max_speed_m_s);
         let now = scan.stamp_s;
+        let (limited, speed_limited) = limit_speed(wish_body, cfg.max_speed_m_s);
         let recalled = || self.memory.recalled(pose, now, cfg.obstacle_memory_s);
+        // A mover closing in is stepped aside from; walls still bind through the guard.
+        let mover = self.movers.closing(&sweep, pose, now, &cfg);
+        let limited = match &mover {
+            Some(m) => {
+                let (v, side) = evade(m, limited, &sweep, recalled, &cfg, self.movers.side());
+                self.movers.pass_on(side);
+                v
+            }
+            None => limited,
+        };
         let (safe, guard) = guard_velocity(limited, &sweep, recalled, &cfg);
         let guard_reach_m = cfg.r_min_m() + cfg.max_speed_m_s / cfg.approach_rate_1_s;
         self.memory.remember(&sweep, pose, now, guard_reach_m);
@@ -163,6 +179,7 @@ impl<const S: usize> Guidance<S> {
                 narrow_gaps_flown_past: field.narrow_gaps,
                 gain_m2_s: field.gain_m2_s,
                 speed_limited,
+                mover,
                 guard,
             },
         }
@@ -181,6 +198,7 @@ fn hover(outcome: Outcome, nearest_range_m: Option<f32>) -> GuidanceCommand {
             narrow_gaps_flown_past: 0,
             gain_m2_s: 0.0,
             speed_limited: false,
+            mover: None,
             guard: Guard::Clear,
         },
     }
