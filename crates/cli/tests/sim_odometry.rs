@@ -55,8 +55,9 @@ fn icl_keeps_its_near_error_low_down_the_office_corridors() {
     std::fs::remove_dir_all(Path::new(&dir)).ok();
     let degenerate = json_number(&odometry, "degenerate_matches");
     let near = json_number(&eval, "near_trans_mean_m");
-    // Hundreds of matches leave the corridor's axis to the point-to-point passes; holding the
-    // guess there instead doubled the near error (3.2 cm, BENCHMARKS.md).
-    assert!(degenerate > 100.0, "{odometry}");
+    // The wall ends (door frames) measure the corridor's axis in most corridor matches (375
+    // are degenerate without them); the rest, out of sight of any door, still leave it to the
+    // point-to-point passes, without which the near error doubled (3.2 cm, BENCHMARKS.md).
+    assert!(degenerate > 20.0 && degenerate < 200.0, "{odometry}");
     assert!(near < 0.02, "near-relation error {near} m: {eval}");
 }
