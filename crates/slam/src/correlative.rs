@@ -44,16 +44,15 @@ pub struct Window {
     pub heading_rad: f32,
 }
 
-/// What a pose's distance from where the motion may have led costs, in mean likelihood (the
-/// score's units): of poses that fit about equally well, such as places along a featureless
-/// corridor or a corridor seen looking back the way the vehicle came (a 180° lidar sees much
-/// the same there), the one nearer the guess wins. This is the motion model's term
-/// of Olson's (2009) posterior, as a quadratic penalty. The search stays exact, since a
-/// block's bound subtracts the least penalty of any pose in it.
+/// What a pose's distance from the motion guess costs, in mean likelihood (the score's units):
+/// of poses that fit about equally well, such as places along a featureless corridor or a
+/// corridor seen looking back the way the vehicle came (a 180° lidar sees much the same
+/// there), the one nearer the guess wins. This is the motion model's term of Olson's (2009)
+/// posterior, as a quadratic penalty; the search stays exact, since a block's bound
+/// subtracts the least penalty of any pose in it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MotionPrior {
-    /// Score lost per square metre of translation and per square radian of turn away from the
-    /// guess.
+    /// Score lost per square metre of translation and per square radian of turn.
     pub per_m2: f32,
     pub per_rad2: f32,
 }
@@ -167,19 +166,12 @@ impl LookupGrid {
         min_score: f32,
         config: &CorrelativeConfig,
     ) -> Option<Found> {
-        self.search_near(
-            points,
-            guess,
-            window,
-            MotionPrior::default(),
-            min_score,
-            config,
-        )
+        let prior = MotionPrior::default();
+        self.search_near(points, guess, window, prior, min_score, config)
     }
 
-    /// The pose that fits best once poses away from the motion's hypotheses are penalised by
-    /// `prior`, if its penalised score reaches `min_score`; the score returned is its own
-    /// likelihood, without the penalty, for the caller to judge the fit.
+    /// The pose that fits best once poses away from the guess are penalised by `prior`, if its
+    /// penalised score reaches `min_score`; the score returned is its own fit, unpenalised.
     pub fn search_near(
         &self,
         points: &[Vec2],
@@ -290,11 +282,9 @@ impl LookupGrid {
                 while iy <= half {
                     let cost = layout.cost(heading, ix, iy, top_step);
                     // A block the penalty alone rules out is not scored.
-                    let bound = if (layout.norm as u32).saturating_sub(cost) > threshold {
-                        self.score(cells, top, ix, iy).saturating_sub(cost)
-                    } else {
-                        0
-                    };
+                    let open = (layout.norm as u32).saturating_sub(cost) > threshold;
+                    let score = || self.score(cells, top, ix, iy).saturating_sub(cost);
+                    let bound = if open { score() } else { 0 };
                     if bound > threshold {
                         roots.push(Candidate {
                             heading,
@@ -548,6 +538,20 @@ mod tests {
         assert!(found.score > 0.8, "{found:?}");
     }
 
+    /// The room, the room as seen from `truth`, and a window that holds it.
+    fn room_seen_from(truth: Pose2) -> (CorrelativeConfig, Vec<Vec2>, Vec<Vec2>, Window) {
+        let reference = room();
+        let current = reference
+            .iter()
+            .map(|&p| truth.inverse().transform(p))
+            .collect();
+        let window = Window {
+            translation_m: 0.6,
+            heading_rad: 0.35,
+        };
+        (CorrelativeConfig::default(), reference, current, window)
+    }
+
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
         /// Pruning never loses the best fine-grid pose, wherever the truth lies in the window
@@ -556,17 +560,7 @@ mod tests {
         fn branch_and_bound_equals_exhaustive_search(
             x in -0.5f32..0.5, y in -0.5f32..0.5, t in -0.3f32..0.3, levels in 2usize..7,
         ) {
-            let cfg = CorrelativeConfig::default();
-            let reference = room();
-            let truth = Pose2::new(x, y, t);
-            let current: Vec<Vec2> = reference
-                .iter()
-                .map(|&p| truth.inverse().transform(p))
-                .collect();
-            let window = Window {
-                translation_m: 0.6,
-                heading_rad: 0.35,
-            };
+            let (cfg, reference, current, window) = room_seen_from(Pose2::new(x, y, t));
             let pruned = LookupGrid::new(&reference, 0.2, &cfg, levels)
                 .search(&current, Pose2::IDENTITY, window, 0.0, &cfg);
             let exhaustive = LookupGrid::new(&reference, 0.2, &cfg, 1)
@@ -584,17 +578,7 @@ mod tests {
             x in -0.5f32..0.5, y in -0.5f32..0.5, t in -0.3f32..0.3, levels in 2usize..7,
             per_m2 in 0.0f32..5.0, per_rad2 in 0.0f32..2.0,
         ) {
-            let cfg = CorrelativeConfig::default();
-            let reference = room();
-            let truth = Pose2::new(x, y, t);
-            let current: Vec<Vec2> = reference
-                .iter()
-                .map(|&p| truth.inverse().transform(p))
-                .collect();
-            let window = Window {
-                translation_m: 0.6,
-                heading_rad: 0.35,
-            };
+            let (cfg, reference, current, window) = room_seen_from(Pose2::new(x, y, t));
             let prior = MotionPrior { per_m2, per_rad2 };
             let guess = Pose2::new(0.1, -0.1, 0.05);
             let pruned = LookupGrid::new(&reference, 0.2, &cfg, levels)
