@@ -149,7 +149,9 @@ fn a_featureless_corridor_is_reported_degenerate_and_never_flown_to_its_end() {
     // 40 m of smooth walls seen by a 4 m lidar: the SLAM cannot tell how far along it is. Its
     // pose fixes say so, the estimate is not pinned to its guess, and the vehicle lands when
     // it no longer knows where it is instead of running down the corridor into the far wall
-    // (x = 46 m) at whatever speed the unobserved axis reached.
+    // (x = 46 m) at whatever speed the unobserved axis reached. That landing still knows the
+    // position across the corridor and holds it: a level landing drifted half a metre toward
+    // a wall.
     let (report, states) = explore(
         World::parse(LONG_CORRIDOR).unwrap(),
         1,
@@ -163,4 +165,7 @@ fn a_featureless_corridor_is_reported_degenerate_and_never_flown_to_its_end() {
     assert!(e.landed, "{e:?}");
     let farthest = states.iter().map(|s| s.position.x).fold(f64::MIN, f64::max);
     assert!(farthest < 15.0, "flew to x = {farthest} m");
+    // The corridor's centre line is y = 1 m.
+    let down = states.last().unwrap().position;
+    assert!((down.y - 1.0).abs() < 0.25, "landed at y = {:.2} m", down.y);
 }

@@ -44,6 +44,20 @@ pub struct Window {
     pub heading_rad: f32,
 }
 
+/// What a pose's distance from where the motion may have led costs, in mean likelihood (the
+/// score's units): of poses that fit about equally well, such as places along a featureless
+/// corridor or a corridor seen looking back the way the vehicle came (a 180° lidar sees much
+/// the same there), the one nearer the guess wins. This is the motion model's term
+/// of Olson's (2009) posterior, as a quadratic penalty. The search stays exact, since a
+/// block's bound subtracts the least penalty of any pose in it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MotionPrior {
+    /// Score lost per square metre of translation and per square radian of turn away from the
+    /// guess.
+    pub per_m2: f32,
+    pub per_rad2: f32,
+}
+
 /// The best pose found and how well the scan fits there.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Found {
@@ -153,7 +167,29 @@ impl LookupGrid {
         min_score: f32,
         config: &CorrelativeConfig,
     ) -> Option<Found> {
-        let layout = self.layout(points, guess, window, config)?;
+        self.search_near(
+            points,
+            guess,
+            window,
+            MotionPrior::default(),
+            min_score,
+            config,
+        )
+    }
+
+    /// The pose that fits best once poses away from the motion's hypotheses are penalised by
+    /// `prior`, if its penalised score reaches `min_score`; the score returned is its own
+    /// likelihood, without the penalty, for the caller to judge the fit.
+    pub fn search_near(
+        &self,
+        points: &[Vec2],
+        guess: Pose2,
+        window: Window,
+        prior: MotionPrior,
+        min_score: f32,
+        config: &CorrelativeConfig,
+    ) -> Option<Found> {
+        let layout = self.layout(points, guess, window, prior, config)?;
         let threshold = (min_score * layout.norm) as u32;
         let best = self.run(&layout, threshold, None)?;
         Some(layout.found(self, best, guess))
@@ -172,7 +208,7 @@ impl LookupGrid {
         rival: Rival,
         config: &CorrelativeConfig,
     ) -> Option<f32> {
-        let layout = self.layout(points, guess, window, config)?;
+        let layout = self.layout(points, guess, window, MotionPrior::default(), config)?;
         let around = layout.candidate_of(self, winner.pose, guess);
         let exclusion = Exclusion {
             around,
@@ -190,6 +226,7 @@ impl LookupGrid {
         points: &[Vec2],
         guess: Pose2,
         window: Window,
+        prior: MotionPrior,
         config: &CorrelativeConfig,
     ) -> Option<Layout> {
         let scored = self.scored_points(points, config);
@@ -220,12 +257,18 @@ impl LookupGrid {
                     .collect()
             })
             .collect();
+        let norm = 255.0 * scored.len() as f32;
+        let turn_cost = (-headings..=headings)
+            .map(|h| (norm * prior.per_rad2 * (h as f32 * heading_step).powi(2)) as u32)
+            .collect();
         Some(Layout {
             cells,
             headings,
             heading_step,
             half: (window.translation_m / self.resolution).ceil() as i32,
-            norm: 255.0 * scored.len() as f32,
+            norm,
+            cell_cost: norm * prior.per_m2 * self.resolution * self.resolution,
+            turn_cost,
         })
     }
 
@@ -245,7 +288,13 @@ impl LookupGrid {
             while ix <= half {
                 let mut iy = -half;
                 while iy <= half {
-                    let bound = self.score(cells, top, ix, iy);
+                    let cost = layout.cost(heading, ix, iy, top_step);
+                    // A block the penalty alone rules out is not scored.
+                    let bound = if (layout.norm as u32).saturating_sub(cost) > threshold {
+                        self.score(cells, top, ix, iy).saturating_sub(cost)
+                    } else {
+                        0
+                    };
                     if bound > threshold {
                         roots.push(Candidate {
                             heading,
@@ -263,11 +312,12 @@ impl LookupGrid {
         roots.sort_by_key(|c| std::cmp::Reverse(c.bound));
         let mut search = Search {
             grid: self,
+            layout,
             best: (threshold, None),
             exclusion,
         };
         for root in roots {
-            search.expand(&layout.cells, root, half);
+            search.expand(root);
         }
         search.best.1
     }
@@ -328,9 +378,21 @@ struct Layout {
     heading_step: f32,
     half: i32,
     norm: f32,
+    /// The motion prior's penalty in score units: per square cell of translation from the
+    /// guess, and for each heading of `cells`.
+    cell_cost: f32,
+    turn_cost: Vec<u32>,
 }
 
 impl Layout {
+    /// The least penalty of any leaf in the `size × size` block at (`ix`, `iy`) of `heading`.
+    fn cost(&self, heading: usize, ix: i32, iy: i32, size: i32) -> u32 {
+        // The block's nearest leaf to the guess along one axis, in cells.
+        let gap = |lo: i32| (lo.max(0) + (lo + size - 1).min(0)) as f32;
+        let (dx, dy) = (gap(ix), gap(iy));
+        self.turn_cost[heading].saturating_add((self.cell_cost * (dx * dx + dy * dy)) as u32)
+    }
+
     /// The leaf of `pose` (an answer of this layout).
     fn candidate_of(&self, grid: &LookupGrid, pose: Pose2, guess: Pose2) -> Candidate {
         let turn = plumbline_core::geom::normalize_angle(pose.theta - guess.theta);
@@ -351,7 +413,8 @@ impl Layout {
                 guess.y + best.iy as f32 * grid.resolution,
                 plumbline_core::geom::normalize_angle(theta),
             ),
-            score: best.bound as f32 / self.norm,
+            // The leaf's bound is its penalised score: the penalty is added back.
+            score: (best.bound + self.cost(best.heading, best.ix, best.iy, 1)) as f32 / self.norm,
         }
     }
 }
@@ -383,6 +446,7 @@ struct Candidate {
 
 struct Search<'g> {
     grid: &'g LookupGrid,
+    layout: &'g Layout,
     /// Best complete score so far (starts at the acceptance threshold) and its candidate.
     best: (u32, Option<Candidate>),
     exclusion: Option<Exclusion>,
@@ -390,7 +454,7 @@ struct Search<'g> {
 
 impl Search<'_> {
     /// Depth first, best bound first; a block is opened only if it can beat the best so far.
-    fn expand(&mut self, cells: &[Vec<(i32, i32)>], c: Candidate, half: i32) {
+    fn expand(&mut self, c: Candidate) {
         if c.bound <= self.best.0 {
             return;
         }
@@ -405,10 +469,14 @@ impl Search<'_> {
         let mut children: Vec<Candidate> = Vec::with_capacity(4);
         for (dx, dy) in [(0, 0), (step, 0), (0, step), (step, step)] {
             let (ix, iy) = (c.ix + dx, c.iy + dy);
-            if ix > half || iy > half {
+            if ix > self.layout.half || iy > self.layout.half {
                 continue;
             }
-            let bound = self.grid.score(&cells[c.heading], level, ix, iy);
+            let cost = self.layout.cost(c.heading, ix, iy, step);
+            let bound = self
+                .grid
+                .score(&self.layout.cells[c.heading], level, ix, iy)
+                .saturating_sub(cost);
             children.push(Candidate {
                 heading: c.heading,
                 ix,
@@ -419,7 +487,7 @@ impl Search<'_> {
         }
         children.sort_by_key(|c| std::cmp::Reverse(c.bound));
         for child in children {
-            self.expand(cells, child, half);
+            self.expand(child);
         }
     }
 }
@@ -505,6 +573,75 @@ mod tests {
                 .search(&current, Pose2::IDENTITY, window, 0.0, &cfg);
             proptest::prop_assert_eq!(pruned.map(|f| f.score), exhaustive.map(|f| f.score));
         }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        /// With a motion prior too, pruning never loses the best penalised pose, and the score
+        /// returned is the pose's own fit.
+        #[test]
+        fn branch_and_bound_with_a_prior_equals_exhaustive_search(
+            x in -0.5f32..0.5, y in -0.5f32..0.5, t in -0.3f32..0.3, levels in 2usize..7,
+            per_m2 in 0.0f32..5.0, per_rad2 in 0.0f32..2.0,
+        ) {
+            let cfg = CorrelativeConfig::default();
+            let reference = room();
+            let truth = Pose2::new(x, y, t);
+            let current: Vec<Vec2> = reference
+                .iter()
+                .map(|&p| truth.inverse().transform(p))
+                .collect();
+            let window = Window {
+                translation_m: 0.6,
+                heading_rad: 0.35,
+            };
+            let prior = MotionPrior { per_m2, per_rad2 };
+            let guess = Pose2::new(0.1, -0.1, 0.05);
+            let pruned = LookupGrid::new(&reference, 0.2, &cfg, levels)
+                .search_near(&current, guess, window, prior, 0.0, &cfg);
+            let exhaustive = LookupGrid::new(&reference, 0.2, &cfg, 1)
+                .search_near(&current, guess, window, prior, 0.0, &cfg);
+            proptest::prop_assert_eq!(pruned, exhaustive);
+            let grid = LookupGrid::new(&reference, 0.2, &cfg, 1);
+            let found = pruned.unwrap();
+            let own = grid.score_pose(&current, found.pose, &cfg);
+            proptest::prop_assert!((own - found.score).abs() < 1e-3, "{own} vs {found:?}");
+        }
+    }
+
+    #[test]
+    fn along_a_featureless_corridor_the_prior_keeps_the_guess() {
+        let cfg = CorrelativeConfig::default();
+        // Two walls 2 m apart, 20 m long; the scan moved 0.7 m along them.
+        let reference: Vec<Vec2> = (0..400)
+            .flat_map(|i| {
+                let x = i as f32 * 0.05 - 10.0;
+                [Vec2::new(x, 1.0), Vec2::new(x, -1.0)]
+            })
+            .collect();
+        let truth = Pose2::new(0.7, 0.0, 0.0);
+        let current: Vec<Vec2> = reference
+            .iter()
+            .filter(|p| p.x.abs() < 6.0)
+            .map(|&p| truth.inverse().transform(p))
+            .collect();
+        let grid = LookupGrid::new(&reference, 1.0, &cfg, 5);
+        let window = Window {
+            translation_m: 1.5,
+            heading_rad: 0.3,
+        };
+        // The guess is right along the corridor and off across it and in heading.
+        let guess = Pose2::new(0.7, 0.25, 0.04);
+        let prior = MotionPrior {
+            per_m2: 0.5,
+            per_rad2: 0.5,
+        };
+        let found = grid
+            .search_near(&current, guess, window, prior, 0.3, &cfg)
+            .expect("a pose");
+        let (shift, turn) = found.pose.distance_to(truth);
+        assert!(shift <= 1.5 * cfg.resolution_m && turn < 0.02, "{found:?}");
+        assert!(found.score > 0.8, "{found:?}");
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //! search over a wide window (Olson 2009) run and hand the tracker a better guess.
 
 use crate::config::GuardConfig;
-use crate::correlative::{LookupGrid, Window};
+use crate::correlative::{LookupGrid, MotionPrior, Window};
 use crate::keyframe::Keyframe;
 use plumbline_core::geom::{Pose2, Vec2};
 
@@ -43,21 +43,25 @@ impl GuessGuard {
     }
 
     /// The guess for a scan whose points are `points`, if the tracker's own should be replaced:
-    /// `guess` is the scan's pose in the frame of keyframe `index` that the tracker will try.
+    /// `guess` is the scan's pose in the frame of keyframe `index` that the tracker will try,
+    /// made by repeating the last motion over `gap_s` since the last scan that matched.
     pub fn check(
         &mut self,
         keyframe: &Keyframe,
         index: usize,
         points: &[Vec2],
         guess: Pose2,
+        gap_s: f32,
     ) -> (Guarded, Option<Pose2>) {
         let cfg = &self.config;
         if !cfg.enabled || points.is_empty() {
             return (Guarded::GuessKept, None);
         }
-        // Scored points lie within `max_range_m` of the scan, and the scan within the window of
-        // the keyframe: farther reference points cannot be reached and would only grow the grid.
-        let reach = cfg.correlative.max_range_m + cfg.window_m;
+        // Scored points lie within `max_range_m` of the scan, and the scan within the largest
+        // step plus the window of the keyframe: farther reference points cannot be reached and
+        // would only grow the grid. Nearer ones must all be there, or a scan that moved far
+        // would find its farthest points on empty cells and fit better short of where it is.
+        let reach = cfg.correlative.max_range_m + cfg.max_step_m;
         let reference =
             || -> Vec<Vec2> { keyframe.points().filter(|p| p.norm() <= reach).collect() };
         if self.keyframe != Some(index) {
@@ -76,14 +80,41 @@ impl GuessGuard {
         let search = self
             .search
             .get_or_insert_with(|| LookupGrid::new(&reference(), 0.5, &cfg.correlative, 5));
+        // How far the motion may have strayed from the repeated one over the gap: the search
+        // reaches three times that (bounded work), and poses are penalised by how unlikely it is.
+        let gap_s = if gap_s.is_finite() {
+            gap_s.max(0.0)
+        } else {
+            0.0
+        };
+        let spread = |floor: f32, accel: f32| floor + 0.5 * accel * gap_s * gap_s;
+        let sigma_m = spread(cfg.sigma_floor_m, cfg.accel_m_s2);
+        let sigma_rad = spread(cfg.sigma_floor_rad, cfg.turn_accel_rad_s2);
         let window = Window {
-            translation_m: cfg.window_m,
-            heading_rad: cfg.window_rad,
+            translation_m: (3.0 * sigma_m).clamp(cfg.window_m, cfg.max_step_m),
+            heading_rad: (3.0 * sigma_rad).clamp(cfg.window_rad, std::f32::consts::PI),
+        };
+        let prior = MotionPrior {
+            per_m2: cfg.prior_weight / (sigma_m * sigma_m),
+            per_rad2: cfg.prior_weight / (sigma_rad * sigma_rad),
+        };
+        // When nothing fits there, the motion was not what the gap suggests (a log with
+        // stamps that do not tell, a spin in place): the widest window, without the penalty.
+        let widest = Window {
+            translation_m: cfg.max_step_m,
+            heading_rad: std::f32::consts::PI,
         };
         let floor = (guess_score * cfg.min_gain).max(cfg.min_found_score);
-        match search.search(points, guess, window, floor, &cfg.correlative) {
-            Some(found) => (Guarded::Searched { score: found.score }, Some(found.pose)),
-            None => (Guarded::NothingBetter, None),
-        }
+        // The penalised winner is the answer; its own fit decides whether it is good enough.
+        [(window, prior), (widest, MotionPrior::default())]
+            .into_iter()
+            .find_map(|(window, prior)| {
+                search
+                    .search_near(points, guess, window, prior, 0.0, &cfg.correlative)
+                    .filter(|found| found.score >= floor)
+            })
+            .map_or((Guarded::NothingBetter, None), |found| {
+                (Guarded::Searched { score: found.score }, Some(found.pose))
+            })
     }
 }

@@ -4,9 +4,11 @@
 //! Candidates come from frozen submaps only (the rolling local map already ties a keyframe to
 //! its recent past) and lie near the new keyframe by the graph's current estimate, within a
 //! radius that grows with the distance travelled since, because that is how far the estimate
-//! can have drifted. Each is verified by the ICL matcher, started from the graph's guess: it
-//! must converge, pair most points tightly, and move the guess no further than the recovery
-//! search reaches. What passes is still only a proposal: the pose graph's robust kernel has the
+//! can have drifted, whichever way the vehicle faced then: a corridor retraced in the opposite
+//! direction is a revisit too. Each is placed by a correlative search against the candidate and
+//! its neighbours, then verified by the ICL matcher against those same keyframes rendered as
+//! one scan seen from there: it must converge, pair most points tightly, and move the coarse
+//! answer no further than a few cells. What passes is still only a proposal: the pose graph's robust kernel has the
 //! last word, so one false match cannot bend the map.
 
 use crate::config::LoopConfig;
@@ -14,7 +16,7 @@ use crate::correlative::{Found, LookupGrid, Window};
 use crate::keyframe::Keyframe;
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::matching::{MatchResult, MatchStatus, ScanMatcher};
-use plumbline_core::scan::Scan;
+use plumbline_core::scan::{Beam, Scan};
 
 /// A verified loop: the pose of keyframe `to` in the frame of keyframe `from`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -77,13 +79,9 @@ impl<const N: usize> LoopCloser<N> {
             if kf.submap > last_submap {
                 break;
             }
-            let (dist, turn) = poses[j].distance_to(here);
+            let dist = poses[j].distance_to(here).0;
             let reach = cfg.search_radius_m + cfg.drift_per_m * (newest.path_m - kf.path_m);
-            if dist > reach
-                || turn > cfg.max_heading_difference_rad
-                || kf.predicted
-                || !kf.has_scan()
-            {
+            if dist > reach || kf.predicted || !kf.has_scan() {
                 continue;
             }
             match best_per_submap.last_mut() {
@@ -114,16 +112,21 @@ impl<const N: usize> LoopCloser<N> {
     ) -> Result<LoopEdge, Rejection> {
         let cfg = &self.config;
         let coarse = self.coarse_search(keyframes, poses, from, to, guess)?;
-        let guess = coarse.found.pose;
-        keyframes[from].to_scan(&mut self.reference);
+        // The reference is the old place as seen from where the coarse search put the new
+        // keyframe, rendered from the candidate and its neighbours: a keyframe passing the old
+        // one in the opposite direction saw the walls the new one sees now from their other
+        // end, which a single old scan through a 180° lidar does not hold.
+        let viewpoint = coarse.found.pose;
+        render_view(&coarse.reference, viewpoint, &mut self.reference);
         keyframes[to].to_scan(&mut self.current);
         self.matcher
             .set_reference(&self.reference)
             .map_err(|_| Rejection::MatchFailed)?;
-        let result = self
+        let mut result = self
             .matcher
-            .match_scan(&self.current, guess)
+            .match_scan(&self.current, Pose2::IDENTITY)
             .map_err(|_| Rejection::MatchFailed)?;
+        result.motion = viewpoint.compose(result.motion);
         let q = &result.quality;
         if q.status != MatchStatus::Converged {
             return Err(Rejection::NotConverged);
@@ -175,7 +178,14 @@ impl<const N: usize> LoopCloser<N> {
         guess: Pose2,
     ) -> Result<Coarse, Rejection> {
         let cfg = &self.config;
-        let first = from.saturating_sub(cfg.reference_neighbours);
+        // Passing the other way, the new keyframe faces what the old path approached the
+        // candidate through: the walls the keyframes before it saw ahead of them.
+        let before = if guess.theta.abs() > core::f32::consts::FRAC_PI_2 {
+            cfg.reference_neighbours_opposite
+        } else {
+            cfg.reference_neighbours
+        };
+        let first = from.saturating_sub(before);
         let last = (from + cfg.reference_neighbours).min(to.saturating_sub(1));
         let mut reference: Vec<Vec2> = Vec::new();
         for k in (first..=last).filter(|&k| keyframes[k].has_scan()) {
@@ -208,6 +218,7 @@ impl<const N: usize> LoopCloser<N> {
             .search(&current, guess, window, cfg.min_score, &cfg.correlative)
             .ok_or(Rejection::NoCoarseFit)?;
         Ok(Coarse {
+            reference,
             grid,
             current,
             guess,
@@ -219,11 +230,43 @@ impl<const N: usize> LoopCloser<N> {
 
 /// A coarse search's answer, with what a rival search needs to repeat it.
 struct Coarse {
+    /// The reference points, in the frame of keyframe `from`.
+    reference: Vec<Vec2>,
     grid: LookupGrid,
     current: Vec<Vec2>,
     guess: Pose2,
     window: Window,
     found: Found,
+}
+
+/// Angular bins of a rendered view: half a degree, finer than the beam spacing of the 180°
+/// lidars of the benchmark logs, so a view keeps their detail.
+const VIEW_BINS: usize = 720;
+
+/// Fills `view` with the `points` (in some frame) as a full-circle scan seen from `viewpoint`
+/// (in that frame): the nearest point in each angular bin, at its own bearing, so walls hide
+/// what lies behind them as they would for a lidar standing there.
+fn render_view<const N: usize>(points: &[Vec2], viewpoint: Pose2, view: &mut Scan<N>) {
+    let bins = VIEW_BINS.min(N);
+    let width = core::f32::consts::TAU / bins as f32;
+    let mut nearest: Vec<Option<Beam>> = vec![None; bins];
+    let into_view = viewpoint.inverse();
+    for &p in points {
+        let local = into_view.transform(p);
+        let (range, bearing) = (local.norm(), local.y.atan2(local.x));
+        if !(range > 0.0 && range.is_finite()) {
+            continue;
+        }
+        let bin = (((bearing + core::f32::consts::PI) / width) as usize).min(bins - 1);
+        if nearest[bin].is_none_or(|b| range < b.range_m) {
+            nearest[bin] = Some(Beam::new(bearing, range));
+        }
+    }
+    view.clear(0.0);
+    for beam in nearest.into_iter().flatten() {
+        // Cannot fail: at most `bins <= N` beams go into an empty scan of N.
+        let _ = view.push(beam);
+    }
 }
 
 /// Lower-left and upper-right corners of the points' bounding box.

@@ -3,11 +3,13 @@
 //!
 //! The scan matcher ([`plumbline_core::matching`]) already derives both from the matched
 //! geometry: the covariance is the residual variance times the inverse of the Gauss-Newton
-//! information of the point-to-line residuals at the solution, and a translation direction is
-//! degenerate when its information (rotation left free) is below `MatchConfig::degenerate_ratio`
-//! (0.02 by default) of the best-constrained direction's. Along that direction the variance is
-//! [`plumbline_core::matching::UNOBSERVED_VARIANCE`]: the pose there is the motion guess, not a
-//! measurement. Nothing here changes the estimate; it only reports.
+//! information of the point-to-line residuals at the solution. A translation direction whose
+//! line information (rotation left free) is below `MatchConfig::degenerate_ratio` of the
+//! best-constrained direction's is measured instead by the ends of walls both scans see (door
+//! frames, openings), with a variance from their beam spacing; only where too few agree is it
+//! reported degenerate, with [`plumbline_core::matching::UNOBSERVED_VARIANCE`] along it: the
+//! pose there is the motion guess, not a measurement. Nothing here changes the estimate; it
+//! only reports.
 
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::matching::MatchResult;

@@ -43,6 +43,9 @@ pub struct ScanPose {
 pub struct TrackingStats {
     pub scans: usize,
     pub predicted_scans: usize,
+    /// Runs of predicted scans in a row: each is an interval in which tracking was lost and
+    /// the poses are the motion model's, not measurements.
+    pub lost_intervals: usize,
     /// Motion guesses that fit badly and were replaced by a wide search, or could not be.
     pub guess_searches_used: usize,
     pub guess_searches_failed: usize,
@@ -61,6 +64,8 @@ pub struct Slam<'m, const N: usize> {
     /// published yet.
     keyframe_tracking: Vec<Pose2>,
     stats: TrackingStats,
+    /// The last scan was predicted (tracking is lost).
+    lost: bool,
 }
 
 /// What a finished run leaves: the backend with its graph and keyframes, and the counts.
@@ -90,6 +95,7 @@ impl<'m, const N: usize> Slam<'m, N> {
             backend,
             keyframe_tracking: Vec::new(),
             stats: TrackingStats::default(),
+            lost: false,
         })
     }
 
@@ -103,6 +109,8 @@ impl<'m, const N: usize> Slam<'m, N> {
         let tracked = self.tracker.track(scan, prior);
         self.stats.scans += 1;
         self.stats.predicted_scans += tracked.predicted as usize;
+        self.stats.lost_intervals += (tracked.predicted && !self.lost) as usize;
+        self.lost = tracked.predicted;
         match tracked.guess {
             Guarded::Searched { .. } => self.stats.guess_searches_used += 1,
             Guarded::NothingBetter => self.stats.guess_searches_failed += 1,

@@ -49,6 +49,8 @@ pub struct Tracker<'m, const N: usize> {
     /// The last pose and the motion that led to it (the lidar-only guess).
     last_pose: Pose2,
     last_motion: Pose2,
+    /// When the last scan that matched was taken, s.
+    last_matched_s: f64,
 }
 
 impl<'m, const N: usize> Tracker<'m, N> {
@@ -69,6 +71,7 @@ impl<'m, const N: usize> Tracker<'m, N> {
             path_m: 0.0,
             last_pose: Pose2::IDENTITY,
             last_motion: Pose2::IDENTITY,
+            last_matched_s: f64::NAN,
         })
     }
 
@@ -86,6 +89,12 @@ impl<'m, const N: usize> Tracker<'m, N> {
             _ => None,
         };
         let pose = self.odometry.pose();
+        if matches!(
+            step.step,
+            OdometryStep::Matched { .. } | OdometryStep::Started
+        ) {
+            self.last_matched_s = scan.stamp_s;
+        }
         self.last_motion = self.last_pose.between(pose);
         self.last_pose = pose;
         let keyframe = (!matches!(step.map, MapUse::NotKeyframe)).then(|| {
@@ -129,7 +138,11 @@ impl<'m, const N: usize> Tracker<'m, N> {
             .filter(|b| b.valid)
             .map(|b| b.point())
             .collect();
-        match self.guard.check(keyframe, self.keyframes, &points, guess) {
+        let gap_s = (scan.stamp_s - self.last_matched_s) as f32;
+        match self
+            .guard
+            .check(keyframe, self.keyframes, &points, guess, gap_s)
+        {
             (checked @ Guarded::Searched { .. }, Some(found)) => (
                 checked,
                 Some(

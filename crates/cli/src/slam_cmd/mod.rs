@@ -164,6 +164,7 @@ pub fn run(args: SlamArgs) -> CliResult {
         "relocalizations": tracking.guess_searches_used,
         "relocalizations_failed": tracking.guess_searches_failed,
         "predicted_scans": tracking.predicted_scans,
+        "lost_intervals": tracking.lost_intervals,
         "lost_s": lost_s,
         "wall_s": wall_s,
         "realtime_factor": if wall_s > 0.0 { duration / wall_s } else { 0.0 },

@@ -63,8 +63,19 @@ pub struct EkfConfig {
     /// Normalised innovation squared above which a measurement is rejected, for 1, 2 and 3
     /// dimensions (chi-square 99.7 %).
     pub gate_nis: [f32; 3],
-    /// The estimate is invalid once the horizontal position one-sigma exceeds this (m).
+    /// The horizontal position is known along a principal axis of its covariance while the
+    /// one-sigma along it is within this (m); the estimate is valid while both are
+    /// ([`super::validity`]).
     pub max_position_std_m: f32,
+    /// Bounds of the degraded estimate, known across one axis only, on which a mission leg
+    /// flies on ([`super::validity`]): the one-sigma of the velocity (m/s) and of the position
+    /// (m) along the unknown axis. The velocity's is the one that binds in a corridor: 0.5 m/s
+    /// is the guidance's top speed, and a vehicle whose speed along the corridor is that
+    /// uncertain no longer knows whether it is stopping. The position's keeps the map pose
+    /// and the way home within what the companion can match again (a short-range lidar's
+    /// reach).
+    pub degraded_max_velocity_std_m_s: f32,
+    pub degraded_max_position_std_m: f32,
     /// After this many consecutive rejections of one sensor, the filter stops trusting its own
     /// prediction of what that sensor sees: the measured states' variance is reset so the next
     /// measurement is taken. Without this, a filter that has drifted (an unsensed touchdown
@@ -97,6 +108,8 @@ impl Default for EkfConfig {
             // outliers (a match 0.5 m off at 5 cm) still score around 100.
             gate_nis: [26.4, 34.9, 42.5],
             max_position_std_m: 1.5,
+            degraded_max_velocity_std_m_s: 0.5,
+            degraded_max_position_std_m: 3.0,
             reset_after_rejections: 10,
             reopen_std: [1.0, 5.0, 1.0, 0.3],
             // Tuned in the simulator with the XV-11 profile (crates/sim/tests/closed_loop.rs).
@@ -206,8 +219,14 @@ impl Ekf {
         &self.p
     }
 
-    /// Finite state and covariance, and a horizontal position one-sigma within bounds.
+    /// Finite state and covariance, and the horizontal position known along both principal
+    /// axes ([`super::validity`]).
     pub fn is_valid(&self) -> bool {
+        self.horizontal() == super::validity::Horizontal::Known
+    }
+
+    /// No NaN or infinity in the state or the covariance, and no negative variance.
+    pub(super) fn is_finite(&self) -> bool {
         // The diagonal suffices: a non-finite covariance entry reaches the diagonal at the next
         // propagation, and checking every entry each step cost more than the prediction. This
         // runs every step, so two instructions a value and no branch: a NaN or an infinity
@@ -219,10 +238,7 @@ impl Ekf {
             sum += x + v;
             lowest = if v < lowest { v } else { lowest };
         }
-        let finite = sum * 0.0 == 0.0 && lowest >= 0.0;
-        let var_xy = self.p[(ix::POS, ix::POS)].max(self.p[(ix::POS + 1, ix::POS + 1)]);
-        let max = self.config.max_position_std_m;
-        finite && var_xy >= 0.0 && var_xy <= max * max
+        sum * 0.0 == 0.0 && lowest >= 0.0
     }
 
     /// Hands out the estimated tilt-filter errors and zeroes them: the tilt (about world x, y;

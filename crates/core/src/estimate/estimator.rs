@@ -10,6 +10,7 @@ use super::ekf::{ix, Counters, Ekf, EkfConfig, Outcome};
 use super::imu::ImuStep;
 use super::pose_fix::{CompanionFrame, FixOutcome, PoseFixConfig};
 use super::sonar::SonarConfig;
+use super::validity::Horizontal;
 use crate::msgs::{EstimatedState, ImuSample, PoseFix, ScanMatchDelta, SonarSample};
 use libm::sqrtf;
 
@@ -246,6 +247,11 @@ impl Estimator {
         if gyro_bias != [0.0; 2] {
             self.attitude.correct_bias(gyro_bias);
         }
+    }
+
+    /// What the horizontal estimate still knows, axis by axis ([`super::validity`]).
+    pub fn horizontal(&self) -> Horizontal {
+        self.ekf.horizontal()
     }
 
     /// The estimate as the controllers and the log see it.

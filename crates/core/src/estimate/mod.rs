@@ -12,3 +12,4 @@ pub mod imu;
 pub mod pose_fix;
 pub mod scan_match;
 pub mod sonar;
+pub mod validity;

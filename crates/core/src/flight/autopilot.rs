@@ -16,6 +16,7 @@ use crate::control::sas;
 use crate::estimate::ekf::Outcome;
 use crate::estimate::estimator::{Estimator, EstimatorCounters, Situation};
 use crate::estimate::pose_fix::CompanionFrame;
+use crate::estimate::validity::Horizontal;
 use crate::msgs::{
     CommandResult, EstimatedState, FailsafeReason, FlightMode, GroundAck, GroundCommand, Inputs,
     MissionSetpoint, MotorCommands, Outputs, PilotInput, PositionSetpoint, Refusal,
@@ -215,6 +216,7 @@ impl Autopilot {
             t_s: inputs.t_s,
             pilot,
             estimate,
+            horizontal: self.estimator.horizontal(),
             scan_accepted,
             battery_v,
             low_thrust: self.low_thrust,
@@ -409,12 +411,18 @@ impl Autopilot {
                 } else {
                     c.descent_m_s
                 };
-                // An untrustworthy horizontal estimate is not chased: land level. After the
-                // lidar is lost the IMU-only estimate drifts faster than its covariance admits
-                // (biases and tilt are no longer observed), so that landing is level too.
-                let trusted = e.valid && failsafe != Some(FailsafeReason::LidarLost);
+                // After the lidar is lost the IMU-only estimate drifts faster than its
+                // covariance admits (biases and tilt are no longer observed): land level, also
+                // when the estimate went invalid first and named the failsafe.
+                let lidar_lost = failsafe == Some(FailsafeReason::LidarLost)
+                    || self.supervisor.lidar_silent(t_s);
+                let horizontal = if lidar_lost {
+                    Horizontal::Unknown
+                } else {
+                    self.estimator.horizontal()
+                };
                 Some(CascadeSetpoint {
-                    horizontal_m: trusted.then_some(hold_xy),
+                    horizontal_m: landing_point(horizontal, hold_xy, e),
                     feed_forward: None,
                     vertical: Vertical::ClimbRate(-rate),
                     yaw_rad,
@@ -480,6 +488,29 @@ impl Autopilot {
             self.faults.bad_pilot = self.faults.bad_pilot.saturating_add(1);
         }
         p
+    }
+}
+
+/// Where a landing holds horizontally: the hold point with both axes known, nothing (a level
+/// landing) with neither. Known across one axis only (a corridor), the hold point's offset is
+/// kept across it and dropped along it: across, the position is held; along, the position loop
+/// sees no error, so the velocity loop stops the vehicle on the velocity estimate, which knows
+/// more than a level landing, which keeps whatever speed the vehicle had (drag takes some ten
+/// seconds to halve it).
+fn landing_point(
+    horizontal: Horizontal,
+    hold_xy: [f32; 2],
+    e: &EstimatedState,
+) -> Option<[f32; 2]> {
+    let here = [e.position_m[0], e.position_m[1]];
+    match horizontal {
+        Horizontal::Known => Some(hold_xy),
+        Horizontal::Across(a) => {
+            let [ax, ay] = a.across_axis;
+            let offset = ax * (hold_xy[0] - here[0]) + ay * (hold_xy[1] - here[1]);
+            Some([here[0] + offset * ax, here[1] + offset * ay])
+        }
+        Horizontal::Unknown => None,
     }
 }
 

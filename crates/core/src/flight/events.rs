@@ -12,6 +12,9 @@ pub enum EventKind {
         to: FlightMode,
     },
     Failsafe(FailsafeReason),
+    /// The estimate lost one horizontal axis and a mission leg flies on with the other and
+    /// the velocity ([`crate::estimate::validity`]); `false` when both axes are back.
+    EstimateDegraded(bool),
     /// The MRAC's adaptive element was switched off (weights reset, baseline flying), or the
     /// MRAC could not be configured and the PID cascade flies.
     AdaptiveFallback(FallbackReason),

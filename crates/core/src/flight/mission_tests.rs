@@ -103,7 +103,9 @@ fn modes(f: &Flight) -> Vec<FlightMode> {
         .iter()
         .filter_map(|e| match e.kind {
             EventKind::ModeChange { to, .. } => Some(to),
-            EventKind::Failsafe(_) | EventKind::AdaptiveFallback(_) => None,
+            EventKind::Failsafe(_)
+            | EventKind::AdaptiveFallback(_)
+            | EventKind::EstimateDegraded(_) => None,
         })
         .collect()
 }

@@ -12,6 +12,7 @@
 use super::events::{EventKind, EventLog};
 use super::ground::{GroundLink, GroundLinkConfig};
 use super::mission::{self, MissionStatus};
+use crate::estimate::validity::Horizontal;
 use crate::msgs::{
     EstimatedState, FailsafeReason, FlightMode, GroundAck, GroundMessages, PilotInput, Refusal,
 };
@@ -72,6 +73,8 @@ pub struct Status {
     pub t_s: f64,
     pub pilot: PilotInput,
     pub estimate: EstimatedState,
+    /// What the estimate still knows horizontally, axis by axis.
+    pub horizontal: Horizontal,
     /// A scan match was accepted by the estimator this step.
     pub scan_accepted: bool,
     /// A finite battery reading arrived this step.
@@ -112,6 +115,8 @@ pub struct Supervisor {
     hold_height_m: f32,
     /// A take-off height a ground command asked for, taken up at the arming it causes.
     takeoff_height_request_m: Option<f32>,
+    /// A mission leg is flying on an estimate known across one axis only.
+    degraded: bool,
 }
 
 impl Supervisor {
@@ -134,6 +139,7 @@ impl Supervisor {
             ack: None,
             hold_height_m: config.takeoff_height_m,
             takeoff_height_request_m: None,
+            degraded: false,
         }
     }
 
@@ -163,6 +169,11 @@ impl Supervisor {
     /// Take-off and hold height (m) of this flight.
     pub fn hold_height_m(&self) -> f32 {
         self.hold_height_m
+    }
+
+    /// No scan match accepted for longer than the lidar timeout, at `t_s`.
+    pub fn lidar_silent(&self, t_s: f64) -> bool {
+        (t_s - self.last_scan_t_s) as f32 > self.config.lidar_timeout_s
     }
 
     /// New thresholds and timings, keeping every timer and latch.
@@ -311,7 +322,7 @@ impl Supervisor {
             self.raise(s.t_s, FailsafeReason::BatteryCritical);
             return true;
         }
-        if !s.estimate.valid {
+        if !self.estimate_flyable(s) {
             self.raise(s.t_s, FailsafeReason::EstimateInvalid);
             return true;
         }
@@ -322,7 +333,7 @@ impl Supervisor {
             return true;
         }
         let silent_s = (s.t_s - self.last_scan_t_s) as f32;
-        if silent_s > self.config.lidar_timeout_s {
+        if self.lidar_silent(s.t_s) {
             self.raise(s.t_s, FailsafeReason::LidarLost);
             return silent_s > self.config.lidar_timeout_s + self.config.lidar_hold_s;
         }
@@ -331,6 +342,22 @@ impl Supervisor {
             self.failsafe = None;
         }
         false
+    }
+
+    /// Whether the estimate carries this mode on. A valid estimate carries every mode. One
+    /// known across a single horizontal axis, within the degraded bounds, carries a mission
+    /// leg only (explore and return fly velocity setpoints that keep clear of the walls on the
+    /// live scan; [`crate::estimate::validity`]); entering and leaving that degraded flight
+    /// are logged. Anything else is the estimate-invalid failsafe, as always.
+    fn estimate_flyable(&mut self, s: &Status) -> bool {
+        let on_mission = matches!(self.mode, FlightMode::Explore | FlightMode::Return);
+        let degraded = !s.estimate.valid && on_mission && s.horizontal.flyable_on_velocity();
+        if degraded != self.degraded {
+            self.degraded = degraded;
+            self.events
+                .push(s.t_s, EventKind::EstimateDegraded(degraded));
+        }
+        s.estimate.valid || degraded
     }
 
     /// The link-lost failsafe of the autonomous modes: hold, then land after

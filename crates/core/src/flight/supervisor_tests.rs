@@ -10,6 +10,10 @@ struct Script {
     pilot: PilotInput,
     height_m: f32,
     valid: bool,
+    /// What the estimate knows horizontally while it is not valid.
+    degraded: Horizontal,
+    /// The companion asks to start exploring.
+    start_explore: bool,
     lidar: bool,
     battery_v: f32,
     low_thrust: bool,
@@ -29,6 +33,8 @@ impl Script {
             pilot: PilotInput::default(),
             height_m: 0.0,
             valid: true,
+            degraded: Horizontal::Unknown,
+            start_explore: false,
             lidar: true,
             battery_v: 12.0,
             low_thrust: false,
@@ -53,11 +59,17 @@ impl Script {
                 t_s: self.t_s,
                 pilot: self.pilot,
                 estimate,
+                horizontal: if self.valid {
+                    Horizontal::Known
+                } else {
+                    self.degraded
+                },
                 scan_accepted: self.lidar && tick.is_multiple_of(20),
                 battery_v: Some(self.battery_v),
                 low_thrust: self.low_thrust,
                 mission: MissionStatus {
                     companion_present: self.companion,
+                    start_requested: self.start_explore,
                     ..MissionStatus::default()
                 },
                 ground: GroundMessages {
@@ -105,7 +117,9 @@ fn a_normal_flight_goes_through_every_mode_and_logs_it() {
     let modes: [FlightMode; 4] = {
         let mut it = s.sup.events().iter().map(|e| match e.kind {
             EventKind::ModeChange { to, .. } => to,
-            EventKind::Failsafe(_) | EventKind::AdaptiveFallback(_) => FlightMode::Killed,
+            EventKind::Failsafe(_)
+            | EventKind::AdaptiveFallback(_)
+            | EventKind::EstimateDegraded(_) => FlightMode::Killed,
         });
         core::array::from_fn(|_| it.next().unwrap())
     };
@@ -177,6 +191,60 @@ fn invalid_estimate_lands() {
     let mut s = Script::new();
     s.climb_to_hold();
     s.valid = false;
+    assert_eq!(s.run(0.01), FlightMode::Land);
+    assert_eq!(s.sup.failsafe(), Some(FailsafeReason::EstimateInvalid));
+}
+
+/// Known across x only (a corridor along y), within the degraded bounds or not.
+fn across_x(flyable: bool) -> Horizontal {
+    Horizontal::Across(crate::estimate::validity::AcrossOnly {
+        across_axis: [1.0, 0.0],
+        across_std_m: 0.03,
+        along_std_m: 2.0,
+        along_velocity_std_m_s: if flyable { 0.3 } else { 0.8 },
+        flyable,
+    })
+}
+
+#[test]
+fn an_estimate_known_across_one_axis_carries_a_mission_leg_only_within_its_bounds() {
+    let mut s = Script::new();
+    s.companion = true;
+    s.climb_to_hold();
+    s.start_explore = true;
+    assert_eq!(s.run(0.1), FlightMode::Explore);
+    s.start_explore = false;
+    s.valid = false;
+    s.degraded = across_x(true);
+    assert_eq!(s.run(1.0), FlightMode::Explore);
+    assert_eq!(s.sup.failsafe(), None);
+    let degraded = |s: &Script| {
+        let mut kinds = s.sup.events().iter().filter_map(|e| match e.kind {
+            EventKind::EstimateDegraded(on) => Some(on),
+            _ => None,
+        });
+        [kinds.next(), kinds.next(), kinds.next()]
+    };
+    assert_eq!(degraded(&s), [Some(true), None, None]);
+    // Both axes back: logged, and nothing else changes.
+    s.valid = true;
+    assert_eq!(s.run(0.1), FlightMode::Explore);
+    assert_eq!(degraded(&s), [Some(true), Some(false), None]);
+    // Past the degraded bounds (the along-axis velocity): the failsafe lands, as always.
+    s.valid = false;
+    s.degraded = across_x(false);
+    assert_eq!(s.run(0.01), FlightMode::Land);
+    assert_eq!(s.sup.failsafe(), Some(FailsafeReason::EstimateInvalid));
+}
+
+#[test]
+fn a_hold_does_not_fly_on_an_estimate_known_across_one_axis() {
+    // Outside a mission leg nothing keeps the vehicle clear of the walls but the hold point,
+    // which needs both axes.
+    let mut s = Script::new();
+    s.climb_to_hold();
+    s.valid = false;
+    s.degraded = across_x(true);
     assert_eq!(s.run(0.01), FlightMode::Land);
     assert_eq!(s.sup.failsafe(), Some(FailsafeReason::EstimateInvalid));
 }

@@ -61,13 +61,16 @@ pub struct MatchConfig {
     /// Converged when an update moves less than these.
     pub convergence_m: f32,
     pub convergence_rad: f32,
-    /// A translation direction is degenerate (a featureless corridor) when its information is
-    /// below this fraction of the best-constrained direction's.
+    /// A translation direction is weak (a corridor's axis) when its point-to-line information
+    /// is below this fraction of the best-constrained direction's: the line metric then holds
+    /// it at the guess, and `icl` measures it from the wall ends both scans see instead. It is
+    /// reported degenerate only when those do not measure it either (a featureless corridor).
     pub degenerate_ratio: f32,
     /// `icl` only: when a translation direction is degenerate, at most this many point-to-point
     /// (`icp`) passes, started from the answer, estimate the motion along it instead of leaving
-    /// the guess there; 0 leaves the guess. The direction is still reported degenerate with its
-    /// variance unobserved, so an estimator fusing the match keeps ignoring it.
+    /// the guess there; 0 leaves the guess. They give no variance: unless the wall ends then
+    /// measure the direction, it is still reported degenerate with its variance unobserved, so
+    /// an estimator fusing the match keeps ignoring it.
     pub degenerate_point_passes: u16,
     /// Seed 000 sec. 4.2: a point is dynamic or an outlier when its cost J at the initial guess
     /// exceeds `gain * (dx_prev^2 + dy_prev^2) + floor^2`.

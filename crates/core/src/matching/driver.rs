@@ -210,7 +210,6 @@ fn covariances(
         _ => {
             let (a, b, c) = h.translation_schur();
             let (hi, _, v_lo) = sym2_eigen(a, b, c);
-            let v_hi = v_lo.perp();
             let var_hi = if hi > 0.0 {
                 s2 / hi
             } else {
@@ -221,18 +220,7 @@ fn covariances(
             } else {
                 UNOBSERVED_VARIANCE
             };
-            let matrix = |var_lo: f32| {
-                let t = |i: usize, j: usize| {
-                    let (hi_i, hi_j) = ([v_hi.x, v_hi.y][i], [v_hi.x, v_hi.y][j]);
-                    let (lo_i, lo_j) = ([v_lo.x, v_lo.y][i], [v_lo.x, v_lo.y][j]);
-                    hi_i * var_hi * hi_j + lo_i * var_lo * lo_j
-                };
-                [
-                    [t(0, 0), t(0, 1), 0.0],
-                    [t(1, 0), t(1, 1), 0.0],
-                    [0.0, 0.0, var_rot],
-                ]
-            };
+            let matrix = |var_lo: f32| split_covariance(v_lo, var_hi, var_lo, var_rot);
             let full = matrix(UNOBSERVED_VARIANCE);
             // Without a reported degenerate direction (the information only failed to invert)
             // a filter has no axis to leave out, so it gets the full covariance.
@@ -244,6 +232,28 @@ fn covariances(
             (full, observed)
         }
     }
+}
+
+/// The covariance of a match whose translation information has its weakest direction along the
+/// unit `v_lo` (variance `var_lo`) and its strongest across it (`var_hi`), with heading variance
+/// `var_rot` and no correlation between them (the degenerate case's shape).
+pub(super) fn split_covariance(
+    v_lo: Vec2,
+    var_hi: f32,
+    var_lo: f32,
+    var_rot: f32,
+) -> [[f32; 3]; 3] {
+    let v_hi = v_lo.perp();
+    let t = |i: usize, j: usize| {
+        let (hi_i, hi_j) = ([v_hi.x, v_hi.y][i], [v_hi.x, v_hi.y][j]);
+        let (lo_i, lo_j) = ([v_lo.x, v_lo.y][i], [v_lo.x, v_lo.y][j]);
+        hi_i * var_hi * hi_j + lo_i * var_lo * lo_j
+    };
+    [
+        [t(0, 0), t(0, 1), 0.0],
+        [t(1, 0), t(1, 1), 0.0],
+        [0.0, 0.0, var_rot],
+    ]
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@
 mod associate;
 mod config;
 mod driver;
+mod edges;
 mod fit_lanes;
 mod icl_paper;
 mod line_sums;
@@ -232,15 +233,21 @@ impl<const N: usize> ScanMatcher<N> {
     }
 }
 
-/// Where `icl` found a translation direction degenerate, moves its answer along that direction
-/// to where a few point-to-point passes put it, when they succeed. The line metric sees nothing
-/// along a wall, so in a corridor it leaves the guess there, and lidar-only odometry then
-/// carries a constant velocity down the whole corridor; the point-to-point passes still see
-/// what little there is (door frames, openings, corners), which keeps that velocity honest.
-/// Measured on the simulator's office survey with the XV-11 (4 m range): near-relation error
-/// 3.2 -> 1.6 cm (BENCHMARKS.md). In a featureless corridor they find nothing and stay near the
-/// guess (test). Heading, the other direction, the quality report and the covariance are the
-/// line metric's: the direction stays reported degenerate and unobserved.
+/// Where `icl` found a translation direction degenerate (a corridor's axis), measures the
+/// motion along it with what the line metric cannot see.
+///
+/// First a few point-to-point passes move the answer along the direction to where they put
+/// it: the line metric leaves the guess there, and lidar-only odometry would carry a constant
+/// velocity down the whole corridor. Measured on the simulator's office survey with the XV-11
+/// (4 m range): near-relation error 3.2 -> 1.6 cm (BENCHMARKS.md). In a featureless corridor
+/// they find nothing and stay near the guess (test). They give no variance, so the direction
+/// stays degenerate after them.
+///
+/// Then the wall ends both scans see ([`edges`]: door frames, openings) measure the motion
+/// along the direction with a variance of their own. Where at least two pairs agree the
+/// direction is observed: the answer moves to theirs, its variance is theirs, and the
+/// direction is no longer reported degenerate. Heading and the other direction stay the line
+/// metric's.
 fn fill_degenerate_direction<const N: usize>(
     reference: &PreparedScan<N>,
     current: &PreparedScan<N>,
@@ -252,26 +259,42 @@ fn fill_degenerate_direction<const N: usize>(
     let Some(v) = result.quality.degenerate_direction else {
         return;
     };
-    if cfg.degenerate_point_passes == 0 {
-        return;
+    if cfg.degenerate_point_passes > 0 {
+        let passes = MatchConfig {
+            max_iterations: cfg.degenerate_point_passes,
+            // The line metric's pass already applied seed 000's test at the guess.
+            dynamic_rejection: false,
+            ..*cfg
+        };
+        if let Ok(points) = driver::run::<PointToPointClosedForm, N>(
+            reference,
+            current,
+            result.motion,
+            previous_translation,
+            &passes,
+            partners,
+        ) {
+            let along = v * v.dot(points.motion.translation() - result.motion.translation());
+            let m = result.motion;
+            result.motion = Pose2::new(m.x + along.x, m.y + along.y, m.theta);
+        }
     }
-    let passes = MatchConfig {
-        max_iterations: cfg.degenerate_point_passes,
-        // The line metric's pass already applied seed 000's test at the guess.
-        dynamic_rejection: false,
-        ..*cfg
-    };
-    let Ok(points) = driver::run::<PointToPointClosedForm, N>(
-        reference,
-        current,
-        result.motion,
-        previous_translation,
-        &passes,
-        partners,
-    ) else {
+    let Some(ends) = edges::measure_along(reference, current, result.motion, v, cfg) else {
         return;
     };
-    let along = v * v.dot(points.motion.translation() - result.motion.translation());
     let m = result.motion;
-    result.motion = Pose2::new(m.x + along.x, m.y + along.y, m.theta);
+    result.motion = Pose2::new(m.x + v.x * ends.shift_m, m.y + v.y * ends.shift_m, m.theta);
+    // The observed covariance has nothing along `v`: projecting the full one (with
+    // UNOBSERVED_VARIANCE along `v`) across it would leave only rounding error in f32.
+    let c = &result.observed_covariance;
+    let across = v.perp();
+    let var_across = across.x * across.x * c[0][0]
+        + 2.0 * across.x * across.y * c[0][1]
+        + across.y * across.y * c[1][1];
+    let covariance = driver::split_covariance(v, var_across, ends.variance_m2, c[2][2]);
+    result.covariance = covariance;
+    result.observed_covariance = covariance;
+    result.quality.degenerate_direction = None;
+    result.quality.conditioning =
+        var_across.min(ends.variance_m2) / var_across.max(ends.variance_m2);
 }

@@ -23,7 +23,8 @@ pub struct MatchQuality {
     /// Points rejected by the seed 000 sec. 4.2 test (moving people, spurious returns).
     pub rejected_dynamic: u16,
     /// Unit direction (reference frame) along which the scans do not constrain translation,
-    /// e.g. the axis of a featureless corridor. The motion along it is the initial guess's.
+    /// e.g. the axis of a featureless corridor: neither wall lines nor wall ends measure it.
+    /// The motion along it is the initial guess's (or the point-to-point passes').
     pub degenerate_direction: Option<Vec2>,
     /// Least over most translational information (1 = equally constrained in x and y).
     pub conditioning: f32,
