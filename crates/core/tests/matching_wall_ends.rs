@@ -6,6 +6,7 @@ use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::matching::{MatchConfig, MatchResult, ScanMatcher, UNOBSERVED_VARIANCE};
 use synthetic::{corridor, scan_within, Seg};
 
+#[allow(dead_code)] // each test binary uses its own share of the shared scenes
 mod synthetic;
 
 const RANGE_M: f32 = 4.0;

@@ -323,7 +323,10 @@ mod tests {
         assert_eq!(bad(|c| c.min_segment_points = 1), "min_segment_points");
         assert_eq!(bad(|c| c.rule_sweep_rad = 7.0), "rule_sweep_rad");
         assert_eq!(bad(|c| c.obstacle_memory_s = -1.0), "obstacle_memory_s");
-        assert_eq!(bad(|c| c.mover_min_closing_m_s = 0.0), "mover_min_closing_m_s");
+        assert_eq!(
+            bad(|c| c.mover_min_closing_m_s = 0.0),
+            "mover_min_closing_m_s"
+        );
         assert_eq!(bad(|c| c.mover_max_speed_m_s = 0.1), "mover_max_speed_m_s");
         assert_eq!(bad(|c| c.evade_horizon_s = f32::NAN), "evade_horizon_s");
         assert_eq!(

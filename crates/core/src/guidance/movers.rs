@@ -120,7 +120,13 @@ impl Movers {
     /// the revolution before as well, near where it is now: a single revolution's closing
     /// speed can be a wall's range noise or an estimate jump, two in a row at one place are
     /// a mover. The track moves on either way.
-    fn tracked(&mut self, seen: Mover, pose: Pose2, dt: f32, cfg: &GuidanceConfig) -> Option<Mover> {
+    fn tracked(
+        &mut self,
+        seen: Mover,
+        pose: Pose2,
+        dt: f32,
+        cfg: &GuidanceConfig,
+    ) -> Option<Mover> {
         let centre = pose.transform(seen.centre_m);
         let along_sight = pose.rotate(seen.unit * -seen.closing_m_s);
         let confirmed = self

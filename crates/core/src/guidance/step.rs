@@ -5,11 +5,11 @@
 //! [`Outcome`]: a scan with no usable beam, a non-finite pose, a non-finite waypoint.
 
 use super::config::{GuidanceConfig, GuidanceConfigError};
+use super::evade::evade;
 use super::field::{field_sum, FieldPart, FieldSum};
 use super::guard::{guard_velocity, Guard};
 use super::heading::{choose_heading, HeadingRule, SideClearance};
 use super::memory::NearMemory;
-use super::evade::evade;
 use super::movers::{Mover, Movers};
 use super::prls::WallSegments;
 use super::sweep::Sweep;
