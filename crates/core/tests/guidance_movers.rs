@@ -72,7 +72,13 @@ fn fly(walls: &[Seg], goal: Vec2, walking: bool, cfg: GuidanceConfig) -> Flight 
         let pose = Pose2::new(at.x, at.y, 0.0);
         let mut scan = scan_within::<BEAMS>(&world, pose, BEAMS, TAU, RANGE_NOISE_M, k, RANGE_M);
         scan.stamp_s = f64::from(t);
-        let cmd = g.step(&scan, pose, GuidanceMode::TowardWaypoint { world_m: [goal.x, goal.y] });
+        let cmd = g.step(
+            &scan,
+            pose,
+            GuidanceMode::TowardWaypoint {
+                world_m: [goal.x, goal.y],
+            },
+        );
         let v = Vec2::new(cmd.velocity_world_m_s[0], cmd.velocity_world_m_s[1]);
         if cmd.decision.mover.is_some() {
             out.mover_steps += 1;
@@ -106,7 +112,12 @@ fn hall() -> Vec<Seg> {
 
 #[test]
 fn a_person_walking_straight_at_the_vehicle_is_sidestepped_with_r_min_to_spare() {
-    let f = fly(&hall(), Vec2::new(6.0, 0.0), true, GuidanceConfig::default());
+    let f = fly(
+        &hall(),
+        Vec2::new(6.0, 0.0),
+        true,
+        GuidanceConfig::default(),
+    );
     assert!(f.mover_steps > 0, "the person was never seen closing in");
     assert!(f.across_m_s > 0.3, "no step across: {} m/s", f.across_m_s);
     assert!(
@@ -121,7 +132,11 @@ fn a_person_walking_straight_at_the_vehicle_is_sidestepped_with_r_min_to_spare()
         ..GuidanceConfig::default()
     };
     let f = fly(&hall(), Vec2::new(6.0, 0.0), true, blind);
-    assert!(f.person_clearance_m < ISSUE_R_MIN_M, "{}", f.person_clearance_m);
+    assert!(
+        f.person_clearance_m < ISSUE_R_MIN_M,
+        "{}",
+        f.person_clearance_m
+    );
 }
 
 #[test]
@@ -131,9 +146,17 @@ fn with_a_wall_beside_the_walkers_line_the_vehicle_steps_to_the_open_side() {
     walls.push(wall((-8.0, 0.9), (8.0, 0.9)));
     let f = fly(&walls, Vec2::new(6.0, 0.0), true, cfg);
     assert!(f.mover_steps > 0);
-    assert!(f.person_clearance_m >= ISSUE_R_MIN_M, "person {}", f.person_clearance_m);
+    assert!(
+        f.person_clearance_m >= ISSUE_R_MIN_M,
+        "person {}",
+        f.person_clearance_m
+    );
     // Started 0.9 m from the wall, the vehicle never closes on it inside r_min.
-    assert!(f.wall_clearance_m >= cfg.r_min_m() - 0.01, "wall {}", f.wall_clearance_m);
+    assert!(
+        f.wall_clearance_m >= cfg.r_min_m() - 0.01,
+        "wall {}",
+        f.wall_clearance_m
+    );
 }
 
 #[test]
@@ -150,6 +173,11 @@ fn walls_alone_are_never_taken_for_a_mover() {
         wall((7.0, -1.0), (7.0, 1.0)),
         wall((5.0, -0.7), (5.2, -0.7)),
     ];
-    let f = fly(&walls, Vec2::new(6.0, 0.0), false, GuidanceConfig::default());
+    let f = fly(
+        &walls,
+        Vec2::new(6.0, 0.0),
+        false,
+        GuidanceConfig::default(),
+    );
     assert_eq!(f.mover_steps, 0);
 }
