@@ -5,8 +5,14 @@
 //! Pure and heap-free: [`Guidance::step`] takes one revolution and the estimated pose and
 //! returns a world-frame velocity and heading plus what the rules decided. It knows nothing of
 //! flight modes; the autopilot or a companion computer calls it once per revolution. Memory:
-//! `size_of::<Guidance<S>>()` (12 KB for 64 segments, 4 KB of it the near-hit memory) plus
-//! about 6 KB of stack a step for a 360-beam scan.
+//! `size_of::<Guidance<S>>()` (about 15 KB for 64 segments: 4 KB of it the near-hit memory,
+//! 3.3 KB the previous revolution's hits by bearing, for finding movers) plus about 9 KB of
+//! stack a step for a 360-beam scan.
+//!
+//! Walking people: a surface that closes in between revolutions faster than a wall's noise
+//! allows is a mover ([`movers`]); one that would reach `r_min` within `evade_horizon_s` is
+//! stepped aside from by a velocity obstacle over guarded candidates ([`evade`]), so walls
+//! keep `r_min` while the vehicle gets out of the walker's way.
 //!
 //! Safety: whatever the rules and the field ask, the last stage ([`guard`]) limits the speed
 //! toward every hit to `approach_rate · (r − r_min)`, so no command closes on a wall inside
