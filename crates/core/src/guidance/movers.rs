@@ -31,6 +31,8 @@ const MAX_GAP_S: f32 = 1.0;
 /// Hits this close to the most urgent one, and closing at least half as fast as a mover must,
 /// belong to the same mover, m: a person is half a metre across.
 const CLUSTER_M: f32 = 0.6;
+/// Fastest closing speed taken from a single revolution, m/s: a brisk walk.
+const WALKING_PACE_M_S: f32 = 1.2;
 /// Weight of the newest revolution in the mover's smoothed velocity.
 const VELOCITY_SMOOTHING: f32 = 0.5;
 /// The seen hits of a round body lie in front of its centre by about this share of its half
@@ -280,8 +282,12 @@ impl Movers {
 
 /// True when `seen` reaches `r_min` before the vehicle, starting once the next revolution
 /// (`dt` from now) has confirmed it, could step its half width plus `r_min` aside at the speed
-/// limit.
+/// limit, and it closes no faster than a person walks: a single revolution's faster closing is
+/// more likely a jump of the pose estimate than a person.
 fn too_close_to_wait(seen: &Mover, dt: f32, cfg: &GuidanceConfig) -> bool {
+    if seen.closing_m_s > WALKING_PACE_M_S {
+        return false;
+    }
     let reach_s = (seen.range_m - cfg.r_min_m()).max(0.0) / seen.closing_m_s;
     let aside_s = (cfg.r_min_m() + seen.half_width_m) / cfg.max_speed_m_s;
     reach_s < dt + aside_s
