@@ -33,9 +33,15 @@ pub struct ProgressWatch {
 }
 
 impl ProgressWatch {
+    /// A leg starting at `t_s` with `remaining_m` to go (not finite: unknown, so any finite
+    /// length is progress).
     pub fn new(t_s: f64, remaining_m: f32) -> Self {
         Self {
-            best_m: remaining_m,
+            best_m: if remaining_m.is_finite() {
+                remaining_m
+            } else {
+                f32::INFINITY
+            },
             since_s: t_s,
             replanned: false,
         }
@@ -43,7 +49,7 @@ impl ProgressWatch {
 
     /// Takes in the remaining way to the goal at `t_s`, m. A non-finite length is no progress.
     pub fn check(&mut self, t_s: f64, remaining_m: f32) -> Verdict {
-        if remaining_m.is_finite() && !(remaining_m > self.best_m - PROGRESS_M) {
+        if remaining_m.is_finite() && remaining_m <= self.best_m - PROGRESS_M {
             *self = Self::new(t_s, remaining_m);
             return Verdict::Progressing;
         }
