@@ -181,3 +181,65 @@ fn walls_alone_are_never_taken_for_a_mover() {
     );
     assert_eq!(f.mover_steps, 0);
 }
+
+/// Time constant of the lagged vehicle below, s: the simulated airframe's velocity loop takes
+/// about this long (latency included) to follow a step in the commanded velocity.
+const VEHICLE_LAG_S: f32 = 0.5;
+
+/// A walker passing a hovering vehicle turns, with its body `turn_clearance_m` from the
+/// vehicle's centre, and walks straight at it (the office's seed-8 encounter: a walker at the
+/// end of its line turning toward a vehicle standing near it). The vehicle follows
+/// the commanded velocity with [`VEHICLE_LAG_S`] of lag. Returns the least clearance between
+/// the vehicle's centre and the walker's body, m.
+fn walker_turning_at_a_hovering_vehicle(turn_clearance_m: f32, cfg: GuidanceConfig) -> f32 {
+    const SPEED_M_S: f32 = 0.72;
+    const TURN_S: f32 = 1.5;
+    let mut g = Guidance::<64>::new(cfg).unwrap();
+    let away = Vec2::new(0.8, 0.6);
+    let passing = Vec2::new(-0.6, 0.8);
+    let turn_at = away * (turn_clearance_m + PERSON_RADIUS_M);
+    let walker_at = |t: f32| {
+        if t < TURN_S {
+            turn_at - passing * (SPEED_M_S * (TURN_S - t))
+        } else {
+            turn_at - away * (SPEED_M_S * (t - TURN_S))
+        }
+    };
+    let (mut at, mut velocity) = (Vec2::ZERO, Vec2::ZERO);
+    let mut clearance = f32::INFINITY;
+    for k in 0..24 {
+        let t = k as f32 * REVOLUTION_S;
+        let mut world = hall();
+        world.extend(person(walker_at(t)));
+        let pose = Pose2::new(at.x, at.y, 0.0);
+        let mut scan = scan_within::<BEAMS>(&world, pose, BEAMS, TAU, RANGE_NOISE_M, k, RANGE_M);
+        scan.stamp_s = f64::from(t);
+        let cmd = g.step(
+            &scan,
+            pose,
+            GuidanceMode::TowardWaypoint {
+                world_m: [0.0, 0.0],
+            },
+        );
+        let wish = Vec2::new(cmd.velocity_world_m_s[0], cmd.velocity_world_m_s[1]);
+        for sub in 1..=10 {
+            let dt = REVOLUTION_S / 10.0;
+            velocity = velocity + (wish - velocity) * (dt / VEHICLE_LAG_S);
+            at = at + velocity * dt;
+            let c = (at - walker_at(t + dt * sub as f32)).norm() - PERSON_RADIUS_M;
+            clearance = clearance.min(c);
+        }
+    }
+    clearance
+}
+
+#[test]
+fn a_walker_turning_at_a_hovering_vehicle_is_evaded_with_r_min_to_spare() {
+    for turn_clearance_m in [1.2, 1.4, 1.6] {
+        let c = walker_turning_at_a_hovering_vehicle(turn_clearance_m, GuidanceConfig::default());
+        assert!(
+            c >= ISSUE_R_MIN_M,
+            "turned {turn_clearance_m} m away, came within {c} m"
+        );
+    }
+}

@@ -53,6 +53,10 @@ pub struct Mover {
     pub half_width_m: f32,
     /// Estimated velocity, sensor frame, m/s.
     pub velocity_m_s: Vec2,
+    /// The vehicle's own velocity over the last revolution, sensor frame, m/s, from the pose
+    /// estimate: the way it is already going is the way it gets out soonest, and turning round
+    /// takes its velocity loop time ([`super::evade`]).
+    pub own_velocity_m_s: Vec2,
 }
 
 /// The previous revolution's nearest hit per world bearing, and the mover being tracked.
@@ -119,7 +123,9 @@ impl Movers {
     /// `seen` with its velocity from the track of its centre, once it was seen closing in on
     /// the revolution before as well, near where it is now: a single revolution's closing
     /// speed can be a wall's range noise or an estimate jump, two in a row at one place are
-    /// a mover. The track moves on either way.
+    /// a mover. A surface already too close to wait a revolution for (see [`too_close_to_wait`])
+    /// counts at once, moving along its line of sight: a needless step aside costs a detour,
+    /// a late one a contact. The track moves on either way.
     fn tracked(
         &mut self,
         seen: Mover,
@@ -137,8 +143,10 @@ impl Movers {
             v + (raw - v) * VELOCITY_SMOOTHING
         });
         self.track = Some((centre, velocity));
-        confirmed.map(|_| Mover {
+        let own = (pose.translation() - self.origin) * (1.0 / dt);
+        (confirmed.is_some() || too_close_to_wait(&seen, dt, cfg)).then(|| Mover {
             velocity_m_s: pose.inverse().rotate(velocity),
+            own_velocity_m_s: pose.inverse().rotate(own),
             ..seen
         })
     }
@@ -276,6 +284,15 @@ impl Movers {
     }
 }
 
+/// True when `seen` reaches `r_min` before the vehicle, starting once the next revolution
+/// (`dt` from now) has confirmed it, could step its half width plus `r_min` aside at the speed
+/// limit.
+fn too_close_to_wait(seen: &Mover, dt: f32, cfg: &GuidanceConfig) -> bool {
+    let reach_s = (seen.range_m - cfg.r_min_m()).max(0.0) / seen.closing_m_s;
+    let aside_s = (cfg.r_min_m() + seen.half_width_m) / cfg.max_speed_m_s;
+    reach_s < dt + aside_s
+}
+
 /// Mean closing speed over the beams around `pos`, when enough of them matched.
 fn smoothed(closing: &[f32], pos: usize) -> Option<f32> {
     let lo = pos.saturating_sub(SMOOTH_BEAMS);
@@ -324,5 +341,6 @@ fn cluster<const N: usize>(
         centre_m,
         half_width_m,
         velocity_m_s: unit * -w,
+        own_velocity_m_s: Vec2::ZERO,
     }
 }
