@@ -16,7 +16,7 @@ use super::movers::Mover;
 use super::sweep::Sweep;
 use crate::geom::Vec2;
 use core::f32::consts::TAU;
-use libm::{cosf, expf, sinf};
+use libm::{cosf, sinf};
 
 /// Directions tried round the compass (15° apart), each at the speed limit and at half of it.
 const HEADINGS: usize = 24;
@@ -32,11 +32,6 @@ const SIDE_SWITCH_COST: f32 = 25.0;
 const SPEED_UNCERTAINTY_M_S: f32 = 0.15;
 /// Instants of the horizon at which the distance to the mover is checked.
 const RISK_SAMPLES: usize = 16;
-/// Time constant of the vehicle's velocity response to a new command, s, latency included:
-/// the simulated F450's velocity loop reverses a 0.45 m/s flight in about 0.7 s. A candidate is
-/// flown from the vehicle's present velocity, not from the instant it is commanded, so turning
-/// round in front of a walker costs what it really costs.
-const VELOCITY_RESPONSE_S: f32 = 0.5;
 
 /// The velocity (sensor frame, m/s, guarded against every fixed hit) that keeps clear of
 /// `mover` and stays nearest to `wish`, and the side of the mover's line of sight it passes on
@@ -93,16 +88,14 @@ fn side_of(v: Vec2, mover: &Mover) -> f32 {
 /// estimated velocity may be off ([`SPEED_UNCERTAINTY_M_S`]), so crossing close in front of a
 /// walker counts as the gamble it is; and it is the deepest point, not the first touch, so that
 /// inside the disc the way out that the mover's own motion opens (across its way) beats backing
-/// off along it. The vehicle reaches `v` from its own present velocity with the first-order lag
-/// [`VELOCITY_RESPONSE_S`].
+/// off along it.
 pub fn contact_risk(v: Vec2, mover: &Mover, cfg: &GuidanceConfig) -> f32 {
     let reach = cfg.r_min_m() + mover.half_width_m;
-    let lag = mover.own_velocity_m_s - v;
+    let relative = v - mover.velocity_m_s;
     let mut deepest = 0.0f32;
     for k in 0..=RISK_SAMPLES {
         let t = cfg.evade_horizon_s * k as f32 / RISK_SAMPLES as f32;
-        let own = v * t + lag * (VELOCITY_RESPONSE_S * (1.0 - expf(-t / VELOCITY_RESPONSE_S)));
-        let distance = (mover.centre_m + mover.velocity_m_s * t - own).norm();
+        let distance = (mover.centre_m - relative * t).norm();
         deepest = deepest.max(reach + SPEED_UNCERTAINTY_M_S * t - distance);
     }
     deepest / reach

@@ -53,10 +53,6 @@ pub struct Mover {
     pub half_width_m: f32,
     /// Estimated velocity, sensor frame, m/s.
     pub velocity_m_s: Vec2,
-    /// The vehicle's own velocity over the last revolution, sensor frame, m/s, from the pose
-    /// estimate: the way it is already going is the way it gets out soonest, and turning round
-    /// takes its velocity loop time ([`super::evade`]).
-    pub own_velocity_m_s: Vec2,
 }
 
 /// The previous revolution's nearest hit per world bearing, and the mover being tracked.
@@ -143,10 +139,8 @@ impl Movers {
             v + (raw - v) * VELOCITY_SMOOTHING
         });
         self.track = Some((centre, velocity));
-        let own = (pose.translation() - self.origin) * (1.0 / dt);
         (confirmed.is_some() || too_close_to_wait(&seen, dt, cfg)).then(|| Mover {
             velocity_m_s: pose.inverse().rotate(velocity),
-            own_velocity_m_s: pose.inverse().rotate(own),
             ..seen
         })
     }
@@ -341,6 +335,5 @@ fn cluster<const N: usize>(
         centre_m,
         half_width_m,
         velocity_m_s: unit * -w,
-        own_velocity_m_s: Vec2::ZERO,
     }
 }
