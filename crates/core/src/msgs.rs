@@ -246,6 +246,10 @@ pub enum FailsafeReason {
     /// A ground station that had been heard went silent (no heartbeat for
     /// `GroundConfig::link_timeout_s`), or its manual sticks stopped: held, then landed.
     LinkLost,
+    /// The companion found the way home (or the leg it flew) making no progress, even after
+    /// planning round the place it stalled at: landed where it was rather than hover until
+    /// the battery runs down.
+    NoProgress,
 }
 
 impl FailsafeReason {
@@ -259,6 +263,7 @@ impl FailsafeReason {
             FailsafeReason::KillSwitch => "kill_switch",
             FailsafeReason::CompanionLost => "companion_lost",
             FailsafeReason::LinkLost => "link_lost",
+            FailsafeReason::NoProgress => "no_progress",
         }
     }
 
@@ -272,6 +277,7 @@ impl FailsafeReason {
             FailsafeReason::KillSwitch => "kill switch",
             FailsafeReason::CompanionLost => "companion lost",
             FailsafeReason::LinkLost => "ground link lost",
+            FailsafeReason::NoProgress => "no progress: landing in place",
         }
     }
 }
@@ -372,6 +378,9 @@ pub enum MissionCommand {
     StartExplore,
     /// Exploration is finished (coverage stopped growing, nothing reachable is left): return.
     ExploreDone,
+    /// The mission cannot go on (no progress toward its goal, even after replanning): land in
+    /// place.
+    LandHere,
 }
 
 /// Everything the companion computer hands the flight part in one step; each part is optional

@@ -23,6 +23,10 @@ pub struct ExploreConfig {
     /// is `r_min`: no planned path comes closer to a mapped obstacle, so a gap narrower than
     /// `2 r_min` is never planned through.
     pub clearance_margin_m: f32,
+    /// No path is planned within this distance of a place the vehicle was found stuck at
+    /// ([`crate::Explorer::block`]), m: wide enough to close a door-sized gap that the map
+    /// shows and the walls do not have.
+    pub blocked_radius_m: f32,
     /// Frontier clusters shorter than this are ignored, m: single unknown cells between far
     /// beams and behind wall corners are not worth a flight.
     pub min_frontier_m: f32,
@@ -65,6 +69,7 @@ impl Default for ExploreConfig {
             plan_cell_m: 0.1,
             vehicle_radius_m: 0.35,
             clearance_margin_m: 0.05,
+            blocked_radius_m: 1.0,
             min_frontier_m: 0.4,
             lookahead_m: 1.0,
             replan_interval_s: 1.0,
@@ -128,6 +133,7 @@ impl ExploreConfig {
         let non_negative = [
             ("clearance_margin_m", self.clearance_margin_m),
             ("min_frontier_m", self.min_frontier_m),
+            ("blocked_radius_m", self.blocked_radius_m),
             ("replan_interval_s", self.replan_interval_s),
             ("full_map_interval_s", self.full_map_interval_s),
             ("unreachable_radius_m", self.unreachable_radius_m),

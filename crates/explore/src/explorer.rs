@@ -80,6 +80,9 @@ pub struct Explorer {
     /// When and at which map version the last plan that found nothing was tried.
     last_empty: Option<(f64, u64)>,
     given_up: Vec<Vec2>,
+    /// Places the vehicle could not get past; plans keep [`ExploreConfig::blocked_radius_m`]
+    /// away from them.
+    blocked: Vec<Vec2>,
     /// Largest known free area that counted as growth, and when.
     coverage: (f32, f64),
     no_frontier_since: Option<f64>,
@@ -107,6 +110,7 @@ impl Explorer {
             plan: None,
             last_empty: None,
             given_up: Vec::new(),
+            blocked: Vec::new(),
             coverage: (0.0, f64::NAN),
             no_frontier_since: None,
             done: None,
@@ -141,6 +145,17 @@ impl Explorer {
 
     pub fn set_home(&mut self, home: Vec2) {
         self.home = Some(home);
+    }
+
+    /// From now on plans keep [`ExploreConfig::blocked_radius_m`] away from `at` (map frame):
+    /// the vehicle made no progress there, so the map's free space there is not to be trusted.
+    /// The next plan is made on a fresh grid.
+    pub fn block(&mut self, at: Vec2) {
+        if at.is_finite() {
+            self.blocked.push(at);
+            self.full = None;
+            self.plan = None;
+        }
     }
 
     pub fn stats(&self) -> ExploreStats {
@@ -271,12 +286,19 @@ impl Explorer {
         {
             self.full = None;
         }
-        let (map, config, coverage, stats) =
-            (&self.map, &self.config, &mut self.coverage, &mut self.stats);
+        let (map, config, coverage, stats, blocked) = (
+            &self.map,
+            &self.config,
+            &mut self.coverage,
+            &mut self.stats,
+            &self.blocked,
+        );
         &self
             .full
             .get_or_insert_with(|| {
-                let grid = PlanGrid::new(map.grid(), config.plan_factor(), config.r_min_m(), None);
+                let mut grid =
+                    PlanGrid::new(map.grid(), config.plan_factor(), config.r_min_m(), None);
+                grid.block(blocked, config.blocked_radius_m);
                 let free_m2 = grid.free_area_m2();
                 stats.known_free_m2 = free_m2;
                 if free_m2 >= coverage.0 + config.coverage_growth_m2 {
@@ -320,12 +342,13 @@ impl Explorer {
     fn replan(&mut self, p: Vec2) {
         self.stats.plans += 1;
         let (now, version, config) = (self.now_s, self.map.version(), self.config);
-        let window = PlanGrid::new(
+        let mut window = PlanGrid::new(
             self.map.grid(),
             config.plan_factor(),
             config.r_min_m(),
             Some((p, config.plan_window_m)),
         );
+        window.block(&self.blocked, config.blocked_radius_m);
         let mut plan = nearest_frontier(&window, p, &config, &self.given_up);
         let whole_map = plan.is_none();
         if whole_map {

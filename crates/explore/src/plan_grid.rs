@@ -164,6 +164,21 @@ impl PlanGrid {
         }
     }
 
+    /// Marks unsafe every cell whose centre lies within `radius_m` of each of `places`: where
+    /// the vehicle could not get through although the map shows free space (a gap in a wall
+    /// the scans never closed, a person in a door).
+    pub fn block(&mut self, places: &[Vec2], radius_m: f32) {
+        if places.is_empty() {
+            return;
+        }
+        for k in 0..self.safe.len() {
+            let c = self.center(k);
+            if places.iter().any(|&q| (c - q).norm() <= radius_m) {
+                self.safe[k] = false;
+            }
+        }
+    }
+
     pub fn width(&self) -> usize {
         self.width
     }

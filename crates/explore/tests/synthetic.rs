@@ -267,3 +267,43 @@ fn a_pose_that_is_not_finite_holds_the_last_position() {
     );
     assert_eq!(e.path_home(Pose2::new(f32::INFINITY, 0.0, 0.0)), None);
 }
+
+#[test]
+fn a_place_the_vehicle_was_stuck_at_is_planned_round_and_a_way_with_none_left_is_none() {
+    // Two 4 m x 4 m rooms side by side; the wall between them (x = 4) has a 1.2 m door low
+    // (y 0.4 to 1.6) and one high (y 2.4 to 3.6). Home is in the left room, the vehicle in the
+    // right one, both low: the way home is through the low door, 6 m.
+    let mut walls = room(0.0, 0.0, 8.0, 4.0, &[]);
+    walls.extend([
+        [4.0, 0.0, 4.0, 0.4],
+        [4.0, 1.6, 4.0, 2.4],
+        [4.0, 3.6, 4.0, 4.0],
+    ]);
+    // Scans from inside the rooms (a pose on the wall's line would see it edge on).
+    let poses = [
+        at(1.0, 1.0),
+        at(2.0, 3.0),
+        at(6.0, 3.0),
+        at(7.0, 1.0),
+        at(3.0, 2.0),
+        at(5.0, 2.0),
+    ];
+    let mut e = explorer(&walls, &poses);
+    e.set_home(Vec2::new(1.0, 1.0));
+    let low = e.path_home(at(7.0, 1.0)).unwrap();
+    assert!((low.length_m - 6.0).abs() < 0.1, "{low:?}");
+    // Stuck in the low door: the way home is through the high one, at its lowest safe point
+    // (y = 2.4 + r_min = 2.8): (7,1) to (4,2.8) to (1,1), 7.0 m, give or take a cell.
+    e.block(Vec2::new(4.0, 1.0));
+    let high = e.path_home(at(7.0, 1.0)).unwrap();
+    let r_min = ExploreConfig::default().r_min_m();
+    let via_high = 2.0 * 3.0f32.hypot(1.4 + r_min);
+    assert!((high.length_m - via_high).abs() < 0.15, "{high:?}");
+    assert!(high
+        .waypoints
+        .iter()
+        .all(|w| (*w - Vec2::new(4.0, 1.0)).norm() > 1.0));
+    // Stuck there too: no way home is left.
+    e.block(Vec2::new(4.0, 3.0));
+    assert_eq!(e.path_home(at(7.0, 1.0)), None);
+}

@@ -169,3 +169,15 @@ fn a_featureless_corridor_is_reported_degenerate_and_never_flown_to_its_end() {
     let down = states.last().unwrap().position;
     assert!((down.y - 1.0).abs() < 0.25, "landed at y = {:.2} m", down.y);
 }
+
+#[test]
+fn a_way_home_through_a_gap_only_the_map_has_is_planned_round_and_flown_home() {
+    // Office seed 3: exploring ends at 144.5 s with the live map missing 1.9 m of the corridor's
+    // north wall (x 15.0 to 16.9), and the way home planned through it. The field cannot fly
+    // through the real wall; after 30 s without progress the way is planned round the place
+    // and the vehicle comes home through the door (it used to hover there until 600 s).
+    let (report, _) = explore(shipped("office"), 3, 300.0, Strategy::Frontier);
+    let e = report.score.explore.as_ref().unwrap();
+    assert!(e.returned_home && e.landed, "{e:?}");
+    assert_eq!(e.failsafe, None, "{e:?}");
+}

@@ -44,6 +44,8 @@ pub fn extend_summary(summary: &mut Value, score: &ExploreScore, exploration: &E
         "explore_end_s": score.explore_end.map(|e| e.0),
         "explore_end": score.explore_end.map(|e| end_name(e.1)),
         "path_home_m": c.path_home_m,
+        "return_stall_replans": c.stall_replans,
+        "return_given_up_s": c.gave_up_s,
         "slam_predicted_scans": c.predicted,
         "slam_degenerate_s": c.degenerate_s,
         "map_corrections": c.resets,

@@ -7,7 +7,9 @@
 //! While exploring or returning the vehicle flies the companion's latest setpoint, mapped from
 //! the companion's map frame into the world frame through the pose-fix anchor; a setpoint older
 //! than `setpoint_timeout_s` is stale and the vehicle holds where it was when it went stale;
-//! no setpoint for `companion_lost_s` lands in place ([`FailsafeReason::CompanionLost`]).
+//! no setpoint for `companion_lost_s` lands in place ([`FailsafeReason::CompanionLost`]), and
+//! so does a companion that finds its leg stuck ([`MissionCommand::LandHere`],
+//! [`FailsafeReason::NoProgress`]).
 //!
 //! The battery decision (seed 002's low-voltage landing, extended for a mission): the remaining
 //! energy is estimated from the smoothed pack voltage; the energy needed to get home is
@@ -125,6 +127,8 @@ pub struct MissionStatus {
     pub at_home: bool,
     /// The companion has sent something within `companion_lost_s`: a mission can be flown.
     pub companion_present: bool,
+    /// The companion asked to land in place ([`MissionCommand::LandHere`]).
+    pub land_requested: bool,
 }
 
 /// Companion inputs that were refused, and the steps spent holding for want of a setpoint.
@@ -143,6 +147,8 @@ pub struct Mission {
     pub config: MissionConfig,
     start_requested: bool,
     done: bool,
+    /// The companion asked to land in place.
+    land_requested: bool,
     /// When the current mission mode began (s): the budget's start and the silence's floor.
     mode_since_t_s: f64,
     /// The latest setpoint of the current mission mode (map frame).
@@ -182,6 +188,7 @@ impl Mission {
         match m.command {
             Some(MissionCommand::StartExplore) => self.start_requested = true,
             Some(MissionCommand::ExploreDone) => self.done = true,
+            Some(MissionCommand::LandHere) => self.land_requested = true,
             None => {}
         }
         if let Some(mut sp) = m.setpoint {
@@ -263,6 +270,7 @@ impl Mission {
             companion_present: self
                 .heard_t_s
                 .is_some_and(|at| ((t_s - at) as f32) <= c.companion_lost_s),
+            land_requested: self.land_requested,
         }
     }
 
@@ -362,6 +370,7 @@ pub fn transition(
     match mode {
         Hold if m.start_requested => Some((Explore, None)),
         Explore | Return if m.companion_silent => Some((Land, Some(FailsafeReason::CompanionLost))),
+        Explore | Return if m.land_requested => Some((Land, Some(FailsafeReason::NoProgress))),
         Explore => match (m.energy, battery_low) {
             (Energy::Short, _) | (Energy::Unknown, true) => Some((Land, low)),
             (Energy::TurnBack | Energy::Plenty, true) => Some((Return, low)),

@@ -480,3 +480,31 @@ fn setpoints_age_by_the_autopilot_clock() {
     assert_eq!(m.target(20.5, &frame, &e, 1.5, false), [1.0, 2.0, 0.5]);
     assert_eq!(m.target(20.7, &frame, &e, 1.5, false), [0.0; 3]);
 }
+
+#[test]
+fn a_companion_that_gives_up_the_way_home_lands_in_place_with_the_reason() {
+    let mut c = Companion::new();
+    c.path_home_m = Some(5.0);
+    c.goal = Some(Goal::Velocity([0.4, 0.0]));
+    let mut f = explore(13, &mut c);
+    // Away from home, then stuck: the companion's setpoint goes nowhere.
+    fly(&mut f, &mut c, 4.0, |_, _| {});
+    c.goal = Some(Goal::Velocity([0.0, 0.0]));
+    c.command = Some(MissionCommand::ExploreDone);
+    fly(&mut f, &mut c, 1.0, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Return, "{:?}", modes(&f));
+    let stopped = f.veh.position_m;
+    c.command = Some(MissionCommand::LandHere);
+    fly(&mut f, &mut c, 0.3, |_, _| {});
+    assert_eq!(
+        (f.out.mode, f.out.failsafe),
+        (FlightMode::Land, Some(FailsafeReason::NoProgress))
+    );
+    fly(&mut f, &mut c, 8.0, |_, _| {});
+    assert_eq!(f.out.mode, FlightMode::Disarmed);
+    let d = hypotf(
+        f.veh.position_m.x - stopped.x,
+        f.veh.position_m.y - stopped.y,
+    );
+    assert!(d < 0.15, "landed {d} m from where it gave up");
+}

@@ -6,7 +6,9 @@
 //!
 //! The mission from the companion's side: wait for the autopilot to hold after take-off, ask
 //! it to explore, explore until the explorer is done or the time left only covers the way home,
-//! then say so and fly the planned path home; the autopilot lands when it is there. Everything
+//! then say so and fly the planned path home; the autopilot lands when it is there. A way home
+//! that makes no progress is planned again round the place it stalled at, and if it still makes
+//! none the companion asks to land in place ([`super::progress`] has the bounds). Everything
 //! runs inline (the SLAM backend too), so a run is a function of its seed.
 
 use super::fix_covariance::fix_covariance;
@@ -14,6 +16,7 @@ use super::ground::GroundStation;
 use super::onboard_link::{
     CompanionComputer, FlightLog, OnboardLink, WithCompanion, LARGE_SCAN_BEAMS, XV11_BEAMS,
 };
+use super::progress::{ProgressWatch, Verdict};
 use super::{Pilot, SetupError};
 use plumbline_core::geom::{normalize_angle, Pose2, Vec2};
 use plumbline_core::guidance::config::GuidanceConfig;
@@ -75,6 +78,8 @@ enum Phase {
     Waiting,
     Exploring,
     Returning,
+    /// The way home made no progress even after replanning: asking to land in place.
+    LandingHere,
     /// The autopilot is landing (or down): only poses are sent.
     Finished,
 }
@@ -105,6 +110,10 @@ pub struct CompanionLog {
     pub map_errors: usize,
     /// Length of the last planned way home, m.
     pub path_home_m: Option<f32>,
+    /// Times the way home made no progress and was planned again round where it stalled.
+    pub stall_replans: usize,
+    /// When the way home was given up for want of progress, s.
+    pub gave_up_s: Option<f64>,
 }
 
 /// SLAM, explorer and guidance of one flight.
@@ -120,6 +129,8 @@ pub struct ExploreCompanion<'m, const N: usize> {
     phase: Phase,
     /// The way home and when it was planned.
     home_path: Option<(f64, Option<Path>)>,
+    /// The progress of the way home, from the start of the return.
+    home_progress: Option<ProgressWatch>,
     last: Option<ScanPose>,
     /// Time of the previous revolution, s.
     last_t_s: Option<f64>,
@@ -149,6 +160,7 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
             end_s,
             phase: Phase::Waiting,
             home_path: None,
+            home_progress: None,
             last: None,
             last_t_s: None,
             reset_counter: 0,
@@ -260,7 +272,30 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
             return;
         };
         let p = pose.translation();
-        let path = self.path_home(t_s, pose).cloned();
+        let mut path = self.path_home(t_s, pose).cloned();
+        let remaining_m = path.as_ref().map_or((home - p).norm(), |p| p.length_m);
+        let watch = self
+            .home_progress
+            .get_or_insert_with(|| ProgressWatch::new(t_s, remaining_m));
+        match watch.check(t_s, remaining_m) {
+            Verdict::Progressing => {}
+            Verdict::Replan => {
+                // Where the vehicle was heading is where the map and the walls disagree.
+                let stalled_at = path
+                    .as_ref()
+                    .map_or(home, |w| w.lookahead(p, HOME_LOOKAHEAD_M));
+                self.explorer.borrow_mut().block(stalled_at);
+                self.log.borrow_mut().stall_replans += 1;
+                self.home_path = None;
+                path = self.path_home(t_s, pose).cloned();
+            }
+            Verdict::GiveUp => {
+                self.log.borrow_mut().gave_up_s = Some(t_s);
+                self.phase = Phase::LandingHere;
+                msgs.command = Some(MissionCommand::LandHere);
+                return;
+            }
+        }
         msgs.path_home_m = path.as_ref().map(|p| p.length_m);
         if (home - p).norm() <= HOME_APPROACH_M {
             msgs.setpoint = Some(CompanionSetpoint {
@@ -329,6 +364,8 @@ impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
                 self.explore(t_s, scan, at.pose, &mut msgs);
             }
             Phase::Returning => self.go_home(t_s, scan, at.pose, &mut msgs),
+            // No setpoint: the autopilot holds where it is until it takes up the landing.
+            Phase::LandingHere => msgs.command = Some(MissionCommand::LandHere),
             Phase::Waiting | Phase::Finished => {}
         }
         self.last_t_s = Some(t_s);

@@ -19,6 +19,7 @@ pub mod mission;
 pub mod onboard_link;
 pub mod pilot;
 pub mod plan;
+mod progress;
 mod report;
 mod software;
 pub mod truth;
