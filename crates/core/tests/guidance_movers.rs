@@ -51,6 +51,23 @@ fn distance_to_segment(p: Vec2, (a, b): Seg) -> f32 {
     (p - (a + ab * u)).norm()
 }
 
+/// The guidance's commanded world velocity at revolution `k` for a vehicle at `at`, heading 0,
+/// bound for `goal`, seeing `world`; also whether it reported a mover.
+fn command(g: &mut Guidance<64>, world: &[Seg], at: Vec2, k: u64, goal: Vec2) -> (Vec2, bool) {
+    let pose = Pose2::new(at.x, at.y, 0.0);
+    let mut scan = scan_within::<BEAMS>(world, pose, BEAMS, TAU, RANGE_NOISE_M, k, RANGE_M);
+    scan.stamp_s = f64::from(k as f32 * REVOLUTION_S);
+    let cmd = g.step(
+        &scan,
+        pose,
+        GuidanceMode::TowardWaypoint {
+            world_m: [goal.x, goal.y],
+        },
+    );
+    let v = Vec2::new(cmd.velocity_world_m_s[0], cmd.velocity_world_m_s[1]);
+    (v, cmd.decision.mover.is_some())
+}
+
 /// The vehicle starts at the origin bound for `goal`; the person (when `walking`) starts at
 /// (4, 0) and walks toward -x at the person's speed.
 fn fly(walls: &[Seg], goal: Vec2, walking: bool, cfg: GuidanceConfig) -> Flight {
@@ -69,18 +86,8 @@ fn fly(walls: &[Seg], goal: Vec2, walking: bool, cfg: GuidanceConfig) -> Flight 
         if walking {
             world.extend(person(person_at(t)));
         }
-        let pose = Pose2::new(at.x, at.y, 0.0);
-        let mut scan = scan_within::<BEAMS>(&world, pose, BEAMS, TAU, RANGE_NOISE_M, k, RANGE_M);
-        scan.stamp_s = f64::from(t);
-        let cmd = g.step(
-            &scan,
-            pose,
-            GuidanceMode::TowardWaypoint {
-                world_m: [goal.x, goal.y],
-            },
-        );
-        let v = Vec2::new(cmd.velocity_world_m_s[0], cmd.velocity_world_m_s[1]);
-        if cmd.decision.mover.is_some() {
+        let (v, mover) = command(&mut g, &world, at, k, goal);
+        if mover {
             out.mover_steps += 1;
             out.across_m_s = out.across_m_s.max(v.y.abs());
         }
@@ -211,17 +218,7 @@ fn walker_turning_at_a_hovering_vehicle(turn_clearance_m: f32, cfg: GuidanceConf
         let t = k as f32 * REVOLUTION_S;
         let mut world = hall();
         world.extend(person(walker_at(t)));
-        let pose = Pose2::new(at.x, at.y, 0.0);
-        let mut scan = scan_within::<BEAMS>(&world, pose, BEAMS, TAU, RANGE_NOISE_M, k, RANGE_M);
-        scan.stamp_s = f64::from(t);
-        let cmd = g.step(
-            &scan,
-            pose,
-            GuidanceMode::TowardWaypoint {
-                world_m: [0.0, 0.0],
-            },
-        );
-        let wish = Vec2::new(cmd.velocity_world_m_s[0], cmd.velocity_world_m_s[1]);
+        let (wish, _) = command(&mut g, &world, at, k, Vec2::ZERO);
         for sub in 1..=10 {
             let dt = REVOLUTION_S / 10.0;
             velocity = velocity + (wish - velocity) * (dt / VEHICLE_LAG_S);
