@@ -145,6 +145,7 @@ impl<const N: usize> Backend<N> {
             .collect();
         let mut candidates = self.loops.candidates(&self.keyframes, &self.poses, new);
         candidates.retain(|&j| !connected.contains(&self.keyframes[j].submap));
+        candidates.truncate(self.loops.budget(&self.keyframes, new));
         let mut accepted = Vec::new();
         for old in candidates {
             self.stats.loop_candidates += 1;

@@ -69,12 +69,15 @@ pub struct LoopConfig {
     pub search_radius_m: f32,
     /// Drift allowance per metre travelled since the candidate, m/m.
     pub drift_per_m: f32,
-    /// At most this many candidates are verified per keyframe (the nearest first): bounded work
-    /// per scan. One against two on the benchmark logs: MIT 0.0276 against 0.0273 m, Intel
-    /// 0.0182 against 0.0180 m, at about half the searches, which keeps the whole-log speed now
-    /// that candidates facing the other way are searched too (Intel thinned to every 4th scan
-    /// pays for it: 0.113 against 0.076 m).
+    /// A keyframe verifies one candidate (the nearest first) per `candidate_interval_s` of log
+    /// since the previous keyframe, at least one and at most `max_candidates`: the loop
+    /// search's work is bounded per second of flight rather than per keyframe, so a vehicle
+    /// whose keyframes come sparsely (a slower lidar, a log thinned to every 4th scan) searches
+    /// as often per second as one whose keyframes come densely. MIT's keyframes come every
+    /// 0.35 s and keep one candidate each; Intel thinned to every 4th scan (a keyframe every
+    /// 1.4 s) gets two: 0.113 -> 0.082 m, at Intel 0.0182 m and MIT 0.0276 m unchanged.
     pub max_candidates: usize,
+    pub candidate_interval_s: f32,
     /// Submaps younger than this (counting the current one) are not searched: the local map
     /// already ties the keyframe to them.
     pub min_submap_gap: usize,
@@ -122,7 +125,8 @@ impl Default for LoopConfig {
         Self {
             search_radius_m: 1.5,
             drift_per_m: 0.05,
-            max_candidates: 1,
+            max_candidates: 2,
+            candidate_interval_s: 0.7,
             min_submap_gap: 2,
             skip_connected_keyframes: 3,
             min_inlier_ratio: 0.5,

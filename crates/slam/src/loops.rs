@@ -101,6 +101,18 @@ impl<const N: usize> LoopCloser<N> {
             .collect()
     }
 
+    /// How many of its candidates keyframe `new` may verify: one per `candidate_interval_s`
+    /// since the previous keyframe, at least one, at most `max_candidates`.
+    pub fn budget(&self, keyframes: &[Keyframe], new: usize) -> usize {
+        let cfg = &self.config;
+        let since_s = match (new.checked_sub(1), keyframes.get(new)) {
+            (Some(previous), Some(newest)) => newest.stamp_s - keyframes[previous].stamp_s,
+            _ => 0.0,
+        };
+        let earned = (since_s / cfg.candidate_interval_s as f64).floor();
+        (earned.max(1.0) as usize).min(cfg.max_candidates.max(1))
+    }
+
     /// Matches keyframe `to` against keyframe `from`, starting from the graph's relative pose.
     pub fn verify(
         &mut self,

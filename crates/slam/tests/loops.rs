@@ -116,3 +116,38 @@ fn the_candidate_alone_does_not_hold_what_the_revisit_sees() {
     let guess = graph[old].between(graph[new]);
     assert!(closer.verify(&keyframes, &graph, old, new, guess).is_err());
 }
+
+#[test]
+fn sparse_keyframes_may_verify_more_candidates_than_dense_ones() {
+    // The loop search is budgeted per second of log: a keyframe that follows the previous one
+    // after a long gap may verify a second candidate, one that follows it closely only one.
+    let config = LoopConfig {
+        max_candidates: 2,
+        candidate_interval_s: 0.7,
+        ..LoopConfig::default()
+    };
+    let closer = LoopCloser::<181>::new(config);
+    let keyframe = |stamp_s: f64| Keyframe {
+        stamp_s,
+        beams: Vec::new(),
+        tracking_pose: Pose2::IDENTITY,
+        submap: 0,
+        path_m: 0.0,
+        predicted: false,
+    };
+    let keyframes: Vec<Keyframe> = [10.0, 10.35, 11.75, 40.0, 39.0]
+        .into_iter()
+        .map(keyframe)
+        .collect();
+    let budgets: Vec<usize> = (0..keyframes.len())
+        .map(|k| closer.budget(&keyframes, k))
+        .collect();
+    // The first keyframe, a dense one, a sparse one, one after a stop (capped), and one whose
+    // stamp went backwards (still one).
+    assert_eq!(budgets, [1, 1, 2, 2, 1]);
+    assert_eq!(
+        closer.budget(&keyframes, 9),
+        1,
+        "a keyframe that does not exist"
+    );
+}
