@@ -1,13 +1,15 @@
 //! Loop closure on a path retraced in the opposite direction with a 180° lidar: the new
 //! keyframe faces away from everything the old keyframe at the same place saw, so the revisit
 //! must be proposed whatever the heading and verified against the keyframes the old path
-//! passed on its way there, not the candidate's own scan.
+//! passed on its way there, not the candidate's own scan. Also the back end's other
+//! scan-to-scan edges: a keyframe matched directly against the one two before it.
 
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::scan::{Beam, Scan};
+use plumbline_slam::backend::Backend;
 use plumbline_slam::keyframe::Keyframe;
 use plumbline_slam::loops::LoopCloser;
-use plumbline_slam::LoopConfig;
+use plumbline_slam::{LoopConfig, SlamConfig};
 
 /// A room 8 m x 6 m.
 fn walls() -> Vec<(Vec2, Vec2)> {
@@ -149,5 +151,50 @@ fn sparse_keyframes_may_verify_more_candidates_than_dense_ones() {
         closer.budget(&keyframes, 9),
         1,
         "a keyframe that does not exist"
+    );
+}
+
+/// Final graph error of the step from keyframe 5 to 6 along y = 2.5 m in the room, heading east
+/// from x = 4 m, when the tracker got that one step wrong by 8 cm sideways (and carried the
+/// error on). Loop search is off, so only the back end's other edges can undo the step.
+fn bad_step_error(skip_edge_span: usize) -> f32 {
+    let walls = walls();
+    let mut config = SlamConfig {
+        skip_edge_span,
+        ..SlamConfig::default()
+    };
+    config.loops.search_radius_m = 0.0;
+    config.loops.drift_per_m = 0.0;
+    let mut backend = Backend::<181>::new(config);
+    let truth: Vec<Pose2> = (0..12)
+        .map(|k| Pose2::new(4.0 + 0.25 * k as f32, 2.5, 0.0))
+        .collect();
+    for (k, &t) in truth.iter().enumerate() {
+        let tracked = if k >= 6 {
+            Pose2::new(t.x, t.y + 0.08, t.theta)
+        } else {
+            t
+        };
+        let mut keyframe = Keyframe::new(&scan(t, &walls), tracked, k / 5, 0.25 * k as f32, false);
+        keyframe.stamp_s = 0.5 * k as f64;
+        backend.add_keyframe(keyframe);
+    }
+    backend.finish();
+    let graph = backend.poses();
+    let step = graph[5].between(graph[6]);
+    step.distance_to(truth[5].between(truth[6])).0
+}
+
+#[test]
+fn a_keyframe_matched_against_the_one_two_before_it_undoes_a_bad_tracker_step() {
+    let alone = bad_step_error(0);
+    assert!(
+        alone > 0.075,
+        "the tracker's chain keeps its error ({alone} m)"
+    );
+    let with_skips = bad_step_error(2);
+    assert!(
+        with_skips < 0.05,
+        "with direct matches two keyframes apart the step is {with_skips} m off (alone {alone} m)"
     );
 }
