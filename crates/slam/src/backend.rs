@@ -25,6 +25,8 @@ pub struct BackendStats {
     /// Keyframes whose scan was dropped because an older keyframe at nearly the same pose
     /// already holds it.
     pub thinned: usize,
+    /// Keyframes tied by a direct match to the one `skip_edge_span` before them.
+    pub skip_edges: usize,
     /// Beams held by all keyframes (the bulk of the back end's memory).
     pub beams_held: usize,
 }
@@ -40,6 +42,8 @@ pub struct Backend<const N: usize> {
     /// Loops accepted since the last optimisation, and keyframes added since.
     pending_loops: usize,
     since_optimised: usize,
+    /// Whether edges were added since the last optimisation that no loop made pending.
+    unoptimised_edges: bool,
     /// (keyframe, submap) of loops accepted lately.
     recent_loops: Vec<(usize, usize)>,
     loops: LoopCloser<N>,
@@ -56,6 +60,7 @@ impl<const N: usize> Backend<N> {
             optimize: OptimizeConfig::default(),
             pending_loops: 0,
             since_optimised: 0,
+            unoptimised_edges: false,
             recent_loops: Vec::new(),
             loops: LoopCloser::new(config.loops),
             stats: BackendStats::default(),
@@ -108,6 +113,7 @@ impl<const N: usize> Backend<N> {
         self.keyframes.push(keyframe);
         self.poses.push(pose);
         self.stats.keyframes += 1;
+        self.add_skip_edge(new);
         let loops = self.close_loops(new);
         self.pending_loops += loops.len();
         self.since_optimised += 1;
@@ -127,8 +133,39 @@ impl<const N: usize> Backend<N> {
 
     /// Optimises what is still pending: call when the log or the flight ends.
     pub fn finish(&mut self) {
-        if self.pending_loops > 0 {
+        if self.pending_loops > 0 || self.unoptimised_edges {
             self.optimise();
+        }
+    }
+
+    /// Ties keyframe `new` to the one `skip_edge_span` before it by matching their scans
+    /// directly. The tracker's edges chain the two through the keyframes between, each step
+    /// with an error of its own; a second path of independent measurements lets the graph
+    /// average those errors out instead of keeping every one of them.
+    fn add_skip_edge(&mut self, new: usize) {
+        let span = self.config.skip_edge_span;
+        let Some(old) = new.checked_sub(span).filter(|_| span >= 2) else {
+            return;
+        };
+        let (a, b) = (&self.keyframes[old], &self.keyframes[new]);
+        // A predicted keyframe's place is a guess: a match from there is no second opinion.
+        if a.predicted || b.predicted || !a.has_scan() || !b.has_scan() {
+            return;
+        }
+        let guess = self.poses[old].between(self.poses[new]);
+        let Some(motion) = self.loops.match_pair(&self.keyframes, old, new, guess) else {
+            return;
+        };
+        let edge = Edge {
+            from: node(old),
+            to: node(new),
+            measurement: to_graph(motion),
+            information: odometry_information(&self.config.noise, motion, &self.keyframes[new]),
+            kind: EdgeKind::Odometry,
+        };
+        if self.graph.add_edge(edge).is_ok() {
+            self.stats.skip_edges += 1;
+            self.unoptimised_edges = true;
         }
     }
 
@@ -145,6 +182,7 @@ impl<const N: usize> Backend<N> {
             .collect();
         let mut candidates = self.loops.candidates(&self.keyframes, &self.poses, new);
         candidates.retain(|&j| !connected.contains(&self.keyframes[j].submap));
+        candidates.truncate(self.loops.budget(&self.keyframes, new));
         let mut accepted = Vec::new();
         for old in candidates {
             self.stats.loop_candidates += 1;
@@ -176,6 +214,7 @@ impl<const N: usize> Backend<N> {
     /// edges the robust kernel ends up ignoring are counted as rejected by the graph.
     fn optimise(&mut self) {
         self.pending_loops = 0;
+        self.unoptimised_edges = false;
         self.since_optimised = 0;
         self.recent_loops.retain(|(k, _)| {
             k + self.config.loops.skip_connected_keyframes >= self.keyframes.len()

@@ -22,6 +22,11 @@ pub struct SlamConfig {
     /// searched only against frozen submaps that are not the newest ones.
     pub keyframes_per_submap: usize,
     pub loops: LoopConfig,
+    /// Each keyframe is also matched directly against the one this many before it, and a
+    /// good match enters the graph as a second odometry edge (0 or 1: none). Two gave Intel
+    /// 0.0182 -> 0.0180 m, MIT 0.0276 -> 0.0271 m, Intel thinned to every 4th scan 0.082 ->
+    /// 0.074 m, MIT every 4th 0.044 -> 0.037 m, for one more match per keyframe.
+    pub skip_edge_span: usize,
     /// A keyframe tied by a verified loop to an older one closer than this (m, rad) drops its
     /// scan: it adds nothing to the map that the older one does not have.
     pub thin_distance_m: f32,
@@ -52,6 +57,7 @@ impl Default for SlamConfig {
             local_map_size_m: 64.0,
             keyframes_per_submap: 20,
             loops: LoopConfig::default(),
+            skip_edge_span: 2,
             thin_distance_m: 0.3,
             thin_angle_rad: 0.25,
             optimise_every_keyframes: 10,
@@ -69,12 +75,15 @@ pub struct LoopConfig {
     pub search_radius_m: f32,
     /// Drift allowance per metre travelled since the candidate, m/m.
     pub drift_per_m: f32,
-    /// At most this many candidates are verified per keyframe (the nearest first): bounded work
-    /// per scan. One against two on the benchmark logs: MIT 0.0276 against 0.0273 m, Intel
-    /// 0.0182 against 0.0180 m, at about half the searches, which keeps the whole-log speed now
-    /// that candidates facing the other way are searched too (Intel thinned to every 4th scan
-    /// pays for it: 0.113 against 0.076 m).
+    /// A keyframe verifies one candidate (the nearest first) per `candidate_interval_s` of log
+    /// since the previous keyframe, at least one and at most `max_candidates`: the loop
+    /// search's work is bounded per second of flight rather than per keyframe, so a vehicle
+    /// whose keyframes come sparsely (a slower lidar, a log thinned to every 4th scan) searches
+    /// as often per second as one whose keyframes come densely. MIT's keyframes come every
+    /// 0.35 s and keep one candidate each; Intel thinned to every 4th scan (a keyframe every
+    /// 1.4 s) gets two: 0.113 -> 0.082 m, at Intel 0.0182 m and MIT 0.0276 m unchanged.
     pub max_candidates: usize,
+    pub candidate_interval_s: f32,
     /// Submaps younger than this (counting the current one) are not searched: the local map
     /// already ties the keyframe to them.
     pub min_submap_gap: usize,
@@ -122,7 +131,8 @@ impl Default for LoopConfig {
         Self {
             search_radius_m: 1.5,
             drift_per_m: 0.05,
-            max_candidates: 1,
+            max_candidates: 2,
+            candidate_interval_s: 0.7,
             min_submap_gap: 2,
             skip_connected_keyframes: 3,
             min_inlier_ratio: 0.5,

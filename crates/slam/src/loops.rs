@@ -101,6 +101,42 @@ impl<const N: usize> LoopCloser<N> {
             .collect()
     }
 
+    /// The pose of keyframe `to` in `from`'s frame by matching their scans directly, from
+    /// `guess`; `None` unless the match converges, pairs most points tightly and fixes both
+    /// directions of translation (the same checks as a loop's).
+    pub fn match_pair(
+        &mut self,
+        keyframes: &[Keyframe],
+        from: usize,
+        to: usize,
+        guess: Pose2,
+    ) -> Option<Pose2> {
+        let cfg = &self.config;
+        keyframes[from].to_scan(&mut self.reference);
+        keyframes[to].to_scan(&mut self.current);
+        self.matcher.set_reference(&self.reference).ok()?;
+        let result = self.matcher.match_scan(&self.current, guess).ok()?;
+        let q = &result.quality;
+        let good = q.status == MatchStatus::Converged
+            && q.inlier_ratio >= cfg.min_inlier_ratio
+            && q.rms_residual_m <= cfg.max_rms_m
+            && q.degenerate_direction.is_none()
+            && q.conditioning >= cfg.min_conditioning;
+        good.then_some(result.motion)
+    }
+
+    /// How many of its candidates keyframe `new` may verify: one per `candidate_interval_s`
+    /// since the previous keyframe, at least one, at most `max_candidates`.
+    pub fn budget(&self, keyframes: &[Keyframe], new: usize) -> usize {
+        let cfg = &self.config;
+        let since_s = match (new.checked_sub(1), keyframes.get(new)) {
+            (Some(previous), Some(newest)) => newest.stamp_s - keyframes[previous].stamp_s,
+            _ => 0.0,
+        };
+        let earned = (since_s / cfg.candidate_interval_s as f64).floor();
+        (earned.max(1.0) as usize).min(cfg.max_candidates.max(1))
+    }
+
     /// Matches keyframe `to` against keyframe `from`, starting from the graph's relative pose.
     pub fn verify(
         &mut self,

@@ -1,13 +1,15 @@
 //! Loop closure on a path retraced in the opposite direction with a 180° lidar: the new
 //! keyframe faces away from everything the old keyframe at the same place saw, so the revisit
 //! must be proposed whatever the heading and verified against the keyframes the old path
-//! passed on its way there, not the candidate's own scan.
+//! passed on its way there, not the candidate's own scan. Also the back end's other
+//! scan-to-scan edges: a keyframe matched directly against the one two before it.
 
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::scan::{Beam, Scan};
+use plumbline_slam::backend::Backend;
 use plumbline_slam::keyframe::Keyframe;
 use plumbline_slam::loops::LoopCloser;
-use plumbline_slam::LoopConfig;
+use plumbline_slam::{LoopConfig, SlamConfig};
 
 /// A room 8 m x 6 m.
 fn walls() -> Vec<(Vec2, Vec2)> {
@@ -115,4 +117,84 @@ fn the_candidate_alone_does_not_hold_what_the_revisit_sees() {
     let (old, new) = (18, RETURN + 15);
     let guess = graph[old].between(graph[new]);
     assert!(closer.verify(&keyframes, &graph, old, new, guess).is_err());
+}
+
+#[test]
+fn sparse_keyframes_may_verify_more_candidates_than_dense_ones() {
+    // The loop search is budgeted per second of log: a keyframe that follows the previous one
+    // after a long gap may verify a second candidate, one that follows it closely only one.
+    let config = LoopConfig {
+        max_candidates: 2,
+        candidate_interval_s: 0.7,
+        ..LoopConfig::default()
+    };
+    let closer = LoopCloser::<181>::new(config);
+    let keyframe = |stamp_s: f64| Keyframe {
+        stamp_s,
+        beams: Vec::new(),
+        tracking_pose: Pose2::IDENTITY,
+        submap: 0,
+        path_m: 0.0,
+        predicted: false,
+    };
+    let keyframes: Vec<Keyframe> = [10.0, 10.35, 11.75, 40.0, 39.0]
+        .into_iter()
+        .map(keyframe)
+        .collect();
+    let budgets: Vec<usize> = (0..keyframes.len())
+        .map(|k| closer.budget(&keyframes, k))
+        .collect();
+    // The first keyframe, a dense one, a sparse one, one after a stop (capped), and one whose
+    // stamp went backwards (still one).
+    assert_eq!(budgets, [1, 1, 2, 2, 1]);
+    assert_eq!(
+        closer.budget(&keyframes, 9),
+        1,
+        "a keyframe that does not exist"
+    );
+}
+
+/// Final graph error of the step from keyframe 5 to 6 along y = 2.5 m in the room, heading east
+/// from x = 4 m, when the tracker got that one step wrong by 8 cm sideways (and carried the
+/// error on). Loop search is off, so only the back end's other edges can undo the step.
+fn bad_step_error(skip_edge_span: usize) -> f32 {
+    let walls = walls();
+    let mut config = SlamConfig {
+        skip_edge_span,
+        ..SlamConfig::default()
+    };
+    config.loops.search_radius_m = 0.0;
+    config.loops.drift_per_m = 0.0;
+    let mut backend = Backend::<181>::new(config);
+    let truth: Vec<Pose2> = (0..12)
+        .map(|k| Pose2::new(4.0 + 0.25 * k as f32, 2.5, 0.0))
+        .collect();
+    for (k, &t) in truth.iter().enumerate() {
+        let tracked = if k >= 6 {
+            Pose2::new(t.x, t.y + 0.08, t.theta)
+        } else {
+            t
+        };
+        let mut keyframe = Keyframe::new(&scan(t, &walls), tracked, k / 5, 0.25 * k as f32, false);
+        keyframe.stamp_s = 0.5 * k as f64;
+        backend.add_keyframe(keyframe);
+    }
+    backend.finish();
+    let graph = backend.poses();
+    let step = graph[5].between(graph[6]);
+    step.distance_to(truth[5].between(truth[6])).0
+}
+
+#[test]
+fn a_keyframe_matched_against_the_one_two_before_it_undoes_a_bad_tracker_step() {
+    let alone = bad_step_error(0);
+    assert!(
+        alone > 0.075,
+        "the tracker's chain keeps its error ({alone} m)"
+    );
+    let with_skips = bad_step_error(2);
+    assert!(
+        with_skips < 0.05,
+        "with direct matches two keyframes apart the step is {with_skips} m off (alone {alone} m)"
+    );
 }
