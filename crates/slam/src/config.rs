@@ -37,6 +37,10 @@ pub struct SlamConfig {
     pub optimise_every_keyframes: usize,
     pub guard: GuardConfig,
     pub noise: EdgeNoise,
+    /// Remove the motion during each revolution whose beams carry their times
+    /// ([`crate::deskew`]) before it is matched and kept. Off by default: a caller whose
+    /// lidar spins slowly against the motion (the XV-11) switches it on.
+    pub deskew: bool,
 }
 
 impl Default for SlamConfig {
@@ -63,6 +67,7 @@ impl Default for SlamConfig {
             optimise_every_keyframes: 10,
             guard: GuardConfig::default(),
             noise: EdgeNoise::default(),
+            deskew: false,
         }
     }
 }

@@ -103,7 +103,7 @@ impl<'m, const N: usize> Tracker<'m, N> {
     /// recent scans' ([`MotionHistory`]); `None` when its beams carry no times or no rate is
     /// known yet.
     fn sweep_motion(&self, scan: &Scan<N>, prior: Option<Pose2>) -> Option<SweepMotion> {
-        if !is_timed(scan) {
+        if !(self.config.deskew && is_timed(scan)) {
             return None;
         }
         match (

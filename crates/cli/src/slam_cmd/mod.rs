@@ -107,7 +107,10 @@ pub fn run(args: SlamArgs) -> CliResult {
         })
         .transpose()?;
     let (mut reader, read_progress) = open_log(&args.log, &args.log_args.options())?;
-    let config = SlamConfig::default();
+    let config = SlamConfig {
+        deskew: beam_dt_s.is_some(),
+        ..SlamConfig::default()
+    };
     let mut cells = local_map_cells(&config);
     let mut slam: Slam<MAX_BEAMS> =
         Slam::new(config, &mut cells, true).map_err(|e| CliError(e.0))?;
