@@ -223,10 +223,8 @@ fn a_jump_of_minutes_in_the_stamps_changes_nothing_but_the_stamps() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-#[test]
-fn a_simulated_survey_with_a_long_range_lidar_closes_loops_and_maps_the_true_walls() {
-    let dir = temp_dir("survey");
-    let out = s(&dir);
+/// Flies the office survey (seed 7) with `lidar` into `dir`.
+fn office_survey(dir: &Path, lidar: &str) {
     ok(&[
         "sim",
         "--world",
@@ -234,13 +232,19 @@ fn a_simulated_survey_with_a_long_range_lidar_closes_loops_and_maps_the_true_wal
         "--scenario",
         "survey",
         "--lidar",
-        "utm30lx",
+        lidar,
         "--seed",
         "7",
         "--out",
-        out,
+        s(dir),
         "--json",
     ]);
+}
+
+#[test]
+fn a_simulated_survey_with_a_long_range_lidar_closes_loops_and_maps_the_true_walls() {
+    let dir = temp_dir("survey");
+    office_survey(&dir, "utm30lx");
     let path = |n: &str| dir.join(n).to_str().unwrap().to_owned();
     let summary = ok(&[
         "slam",
@@ -273,21 +277,7 @@ fn a_simulated_survey_with_a_long_range_lidar_closes_loops_and_maps_the_true_wal
 #[test]
 fn a_slowly_spinning_lidar_named_with_lidar_is_de_skewed_and_maps_closer_to_the_walls() {
     let dir = temp_dir("deskew");
-    let out = s(&dir);
-    ok(&[
-        "sim",
-        "--world",
-        "office",
-        "--scenario",
-        "survey",
-        "--lidar",
-        "xv11",
-        "--seed",
-        "7",
-        "--out",
-        out,
-        "--json",
-    ]);
+    office_survey(&dir, "xv11");
     let clf = dir.join("scans.clf");
     let truth = dir.join("truth.txt");
     let slam = |extra: &[&str]| {
