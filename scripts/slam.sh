@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # SLAM figures for BENCHMARKS.md: the benchmark logs at full rate and thinned to every 4th and
 # 8th scan (lidar-only), scored by the relations metric, with odometry in the same run; then
-# simulated surveys scored against their truth and walls. One TSV row per run.
+# simulated surveys (de-skewed for their lidar) scored against their truth and walls. One TSV
+# row per run.
 #   bash scripts/slam.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -38,7 +39,8 @@ for world in office building; do
   for lidar in xv11 urg04lx utm30lx; do
     d="$out/$world-$lidar"
     "$bin" sim --world $world --scenario survey --lidar $lidar --seed 7 --out "$d" --json >/dev/null
-    s=$("$bin" slam "$d/scans.clf" --out "$d/t.txt" --world $world --truth "$d/truth.txt" --json | tail -1)
+    s=$("$bin" slam "$d/scans.clf" --lidar $lidar --out "$d/t.txt" --world $world --truth "$d/truth.txt" \
+      --json | tail -1)
     e=$("$bin" eval "$d/t.txt" "$d/truth.relations" --json | tail -1)
     row "sim/$world/$lidar/slam" "$s" "$e"
   done
