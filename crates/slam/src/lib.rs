@@ -7,6 +7,7 @@
 pub mod backend;
 pub mod config;
 pub mod correlative;
+pub mod deskew;
 pub mod graph;
 pub mod grid;
 pub mod guard;

@@ -3,6 +3,7 @@
 //! It owns no global state, so its cost per scan stays flat however large the map grows.
 
 use crate::config::SlamConfig;
+use crate::deskew::{deskew, is_timed, MotionHistory, SweepMotion};
 use crate::guard::{Guarded, GuessGuard};
 use crate::keyframe::Keyframe;
 use crate::observed::Observed;
@@ -51,6 +52,11 @@ pub struct Tracker<'m, const N: usize> {
     last_motion: Pose2,
     /// When the last scan that matched was taken, s.
     last_matched_s: f64,
+    /// The last scans' poses: the rate a revolution is de-skewed with.
+    history: MotionHistory,
+    /// The current scan with the motion during its revolution removed (when its beams carry
+    /// their times): what is matched and kept in keyframes.
+    deskewed: Option<Box<Scan<N>>>,
 }
 
 impl<'m, const N: usize> Tracker<'m, N> {
@@ -72,12 +78,47 @@ impl<'m, const N: usize> Tracker<'m, N> {
             last_pose: Pose2::IDENTITY,
             last_motion: Pose2::IDENTITY,
             last_matched_s: f64::NAN,
+            history: MotionHistory::default(),
+            deskewed: None,
         })
     }
 
     /// Tracks the next revolution; `prior` is the motion since the previous scan from another
     /// source (wheel odometry), if any.
     pub fn track(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> Tracked {
+        let mut deskewed = self.deskewed.take().unwrap_or_default();
+        let tracked = match self.sweep_motion(scan, prior) {
+            Some(motion) => {
+                deskew(scan, motion, &mut deskewed);
+                self.track_deskewed(&deskewed, prior)
+            }
+            None => self.track_deskewed(scan, prior),
+        };
+        self.deskewed = Some(deskewed);
+        self.history.push(scan.stamp_s, tracked.pose);
+        tracked
+    }
+
+    /// How the vehicle moves during `scan`'s revolution: at the caller's prior's rate, or the
+    /// recent scans' ([`MotionHistory`]); `None` when its beams carry no times or no rate is
+    /// known yet.
+    fn sweep_motion(&self, scan: &Scan<N>, prior: Option<Pose2>) -> Option<SweepMotion> {
+        if !is_timed(scan) {
+            return None;
+        }
+        match (
+            prior.filter(|p| p.is_finite()),
+            self.history.newest_stamp_s(),
+        ) {
+            (Some(prior), Some(last_s)) => {
+                SweepMotion::from_motion(prior, (scan.stamp_s - last_s) as f32)
+            }
+            _ => self.history.rate(),
+        }
+    }
+
+    /// Tracks a revolution whose motion has been removed (or needed no removing).
+    fn track_deskewed(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> Tracked {
         let (guess, prior) = self.guarded_prior(scan, prior);
         // The match is made in the axes of the keyframe it is made against.
         let reference_heading = self.keyframe.as_ref().map(|k| k.tracking_pose.theta);

@@ -13,6 +13,7 @@ use clap::Args;
 use plumbline_core::scan::Scan;
 use plumbline_io::carmen::{open_log, OdomPose};
 use plumbline_io::output::check_distinct;
+use plumbline_sim::sensors::lidar::LidarProfile;
 use plumbline_slam::map_files::check_writable;
 use plumbline_slam::{local_map_cells, Slam, SlamConfig};
 use serde_json::json;
@@ -45,6 +46,12 @@ pub struct SlamArgs {
     /// in the world.
     #[arg(long, requires = "world")]
     pub truth: Option<PathBuf>,
+    /// The lidar that took the log, if it spins slowly against the motion (xv11, urg04lx,
+    /// utm30lx): each beam is given its time within the revolution, and the motion during the
+    /// revolution is removed before matching. Leave out for logs whose lidar's sweep is short
+    /// against the motion (the SICK scanners of the benchmark logs).
+    #[arg(long, value_name = "NAME")]
+    pub lidar: Option<String>,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Print the summary as one JSON object.
@@ -86,6 +93,19 @@ pub fn run(args: SlamArgs) -> CliResult {
         .zip(args.truth.as_deref())
         .map(|(w, t)| truth::Truth::load(w, t))
         .transpose()?;
+    let beam_dt_s = args
+        .lidar
+        .as_deref()
+        .map(|name| {
+            LidarProfile::by_name(name)
+                .map(|p| p.beam_dt_s() as f32)
+                .ok_or_else(|| {
+                    CliError(format!(
+                        "--lidar {name}: unknown lidar; use xv11, urg04lx or utm30lx"
+                    ))
+                })
+        })
+        .transpose()?;
     let (mut reader, read_progress) = open_log(&args.log, &args.log_args.options())?;
     let config = SlamConfig::default();
     let mut cells = local_map_cells(&config);
@@ -108,6 +128,9 @@ pub fn run(args: SlamArgs) -> CliResult {
                 rec.beam_count()
             ))
         })?;
+        if let Some(dt) = beam_dt_s {
+            time_beams(&mut scan, dt);
+        }
         let prior = odometry_prior(args.odom_prior, previous_odom, rec.odom);
         previous_odom = rec.odom;
         let start = Instant::now();
@@ -177,6 +200,18 @@ pub fn run(args: SlamArgs) -> CliResult {
     });
     print_summary(&summary, args.json);
     Ok(())
+}
+
+/// Gives beam k of `scan` the time `k * beam_dt_s` after the first (a log does not store it).
+fn time_beams(scan: &mut Scan<MAX_BEAMS>, beam_dt_s: f32) {
+    let untimed = scan.clone();
+    scan.clear(untimed.stamp_s);
+    for (k, beam) in untimed.beams().iter().enumerate() {
+        let mut b = *beam;
+        b.time_offset_s = beam_dt_s * k as f32;
+        // As many beams as the scan held before: this cannot fail.
+        let _ = scan.push(b);
+    }
 }
 
 /// The process's peak resident memory, MB, from Linux's `/proc/self/status` (`None` elsewhere).
