@@ -44,8 +44,6 @@ pub struct Backend<const N: usize> {
     since_optimised: usize,
     /// Whether edges were added since the last optimisation that no loop made pending.
     unoptimised_edges: bool,
-    /// (keyframe, submap) of loops accepted lately.
-    recent_loops: Vec<(usize, usize)>,
     loops: LoopCloser<N>,
     stats: BackendStats,
 }
@@ -61,7 +59,6 @@ impl<const N: usize> Backend<N> {
             pending_loops: 0,
             since_optimised: 0,
             unoptimised_edges: false,
-            recent_loops: Vec::new(),
             loops: LoopCloser::new(config.loops),
             stats: BackendStats::default(),
         }
@@ -171,17 +168,7 @@ impl<const N: usize> Backend<N> {
 
     /// Searches keyframe `new` against old submaps; returns the accepted loops' measurements.
     fn close_loops(&mut self, new: usize) -> Vec<Pose2> {
-        // A submap tied to the vehicle by a loop a few keyframes ago is already in the graph:
-        // searching it again would mostly add the same constraint.
-        let recent = self.config.loops.skip_connected_keyframes;
-        let connected: Vec<usize> = self
-            .recent_loops
-            .iter()
-            .filter(|(k, _)| k + recent >= new)
-            .map(|&(_, submap)| submap)
-            .collect();
         let mut candidates = self.loops.candidates(&self.keyframes, &self.poses, new);
-        candidates.retain(|&j| !connected.contains(&self.keyframes[j].submap));
         candidates.truncate(self.loops.budget(&self.keyframes, new));
         let mut accepted = Vec::new();
         for old in candidates {
@@ -216,9 +203,6 @@ impl<const N: usize> Backend<N> {
         self.pending_loops = 0;
         self.unoptimised_edges = false;
         self.since_optimised = 0;
-        self.recent_loops.retain(|(k, _)| {
-            k + self.config.loops.skip_connected_keyframes >= self.keyframes.len()
-        });
         let report = self.graph.optimize(&self.optimize);
         self.stats.optimisations += 1;
         self.stats.loops_downweighted = report.downweighted_loops.len();

@@ -92,8 +92,6 @@ pub struct LoopConfig {
     /// Submaps younger than this (counting the current one) are not searched: the local map
     /// already ties the keyframe to them.
     pub min_submap_gap: usize,
-    /// A submap tied to the vehicle by a loop within this many keyframes is not searched again.
-    pub skip_connected_keyframes: usize,
     /// The candidate's neighbours on each side that join it in the reference of the search
     /// (a 180° scan alone may see too little of a place seen from elsewhere)…
     pub reference_neighbours: usize,
@@ -139,7 +137,6 @@ impl Default for LoopConfig {
             max_candidates: 2,
             candidate_interval_s: 0.7,
             min_submap_gap: 2,
-            skip_connected_keyframes: 3,
             min_inlier_ratio: 0.5,
             max_rms_m: 0.05,
             min_conditioning: 0.1,
