@@ -158,9 +158,15 @@ mod tests {
         // A hit off the line by more than r_min never stops the vehicle; nor does zero speed.
         let off = (Vec2::new(0.6, 0.8), 1.0);
         assert_eq!(free_travel_m(v, [off].into_iter(), 0.5), f32::INFINITY);
-        assert_eq!(free_travel_m(Vec2::ZERO, [ahead].into_iter(), 0.5), f32::INFINITY);
+        assert_eq!(
+            free_travel_m(Vec2::ZERO, [ahead].into_iter(), 0.5),
+            f32::INFINITY
+        );
         // Already inside r_min of a hit ahead: no travel at all.
-        assert_eq!(free_travel_m(v, [(Vec2::new(1.0, 0.0), 0.3)].into_iter(), 0.5), 0.0);
+        assert_eq!(
+            free_travel_m(v, [(Vec2::new(1.0, 0.0), 0.3)].into_iter(), 0.5),
+            0.0
+        );
     }
 
     #[test]
