@@ -4,7 +4,8 @@
 # smallest clearance, mean and smallest explored fraction, flights home and landed.
 #   bash scripts/explore-seeds.sh [FIRST_SEED] [SEEDS] [DURATION_S] [WORLDS...]
 # Defaults: seeds 1..100, 600 s, office building intel, both guidances, the XV-11.
-# LIDAR=urg04lx and GUIDANCE="frontier" narrow a run; JOBS=N flies N at a time.
+# LIDAR=urg04lx and GUIDANCE="frontier" narrow a run; JOBS=N flies N at a time; BIN=PATH flies
+# a given plumbline binary instead of building this checkout (so a build cannot swap it mid-run).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 first=${1:-1}
@@ -15,8 +16,10 @@ worlds=${*:-office building intel}
 lidar=${LIDAR:-xv11}
 guidances=${GUIDANCE:-frontier wall-follow}
 jobs=${JOBS:-1}
-cargo build --release -q -p plumbline
-bin=target/release/plumbline
+if [[ -z ${BIN:-} ]]; then
+  cargo build --release -q -p plumbline
+fi
+bin=${BIN:-target/release/plumbline}
 rows=$(mktemp)
 trap 'rm -f "$rows"' EXIT
 fly() {

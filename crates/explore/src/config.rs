@@ -1,5 +1,6 @@
 //! Every tunable of exploration in one place, with units and the reason for each default.
 
+use crate::plan_grid::Clearance;
 use plumbline_slam::grid::GridConfig;
 
 /// Exploration parameters. Distances in metres, times in seconds of the scans' clock.
@@ -23,6 +24,15 @@ pub struct ExploreConfig {
     /// is `r_min`: no planned path comes closer to a mapped obstacle, so a gap narrower than
     /// `2 r_min` is never planned through.
     pub clearance_margin_m: f32,
+    /// Clearance paths keep from mapped obstacles where the map has room, m: the clearance
+    /// guard's `r_min` (the guidance's), so the guard need not hold the vehicle off a path
+    /// that rounds a corner closer than it allows. Only where the map has no such room (a
+    /// 1.2 m door) do paths come as close as `r_min`, and the search charges `tight_cost`
+    /// times the length there, so they do so for as short a stretch as they can.
+    pub preferred_clearance_m: f32,
+    /// Cost per metre of path closer than `preferred_clearance_m`, in metres of roomy path.
+    /// Default 4: a detour of up to three times a tight stretch's length is taken to avoid it.
+    pub tight_cost: f32,
     /// No path is planned within this distance of a place the vehicle was found stuck at
     /// ([`crate::Explorer::block`]), m: wide enough to close a door-sized gap that the map
     /// shows and the walls do not have.
@@ -69,6 +79,8 @@ impl Default for ExploreConfig {
             plan_cell_m: 0.1,
             vehicle_radius_m: 0.35,
             clearance_margin_m: 0.05,
+            preferred_clearance_m: 0.5,
+            tight_cost: 4.0,
             blocked_radius_m: 1.0,
             min_frontier_m: 0.4,
             lookahead_m: 1.0,
@@ -101,6 +113,15 @@ impl ExploreConfig {
     /// `r_min`: the vehicle radius plus the margin, m.
     pub fn r_min_m(&self) -> f32 {
         self.vehicle_radius_m + self.clearance_margin_m
+    }
+
+    /// How far plans keep from mapped obstacles.
+    pub fn clearance(&self) -> Clearance {
+        Clearance {
+            r_min_m: self.r_min_m(),
+            preferred_m: self.preferred_clearance_m,
+            tight_cost: self.tight_cost,
+        }
     }
 
     /// Fine grid cells per planning cell side.
@@ -147,6 +168,21 @@ impl ExploreConfig {
                 )));
             }
         }
+        if !(self.preferred_clearance_m.is_finite() && self.preferred_clearance_m >= self.r_min_m())
+        {
+            return Err(ConfigError(format!(
+                "preferred_clearance_m is {}; it must be at least r_min = vehicle_radius_m + \
+                 clearance_margin_m = {} m",
+                self.preferred_clearance_m,
+                self.r_min_m()
+            )));
+        }
+        if !(self.tight_cost.is_finite() && self.tight_cost >= 1.0) {
+            return Err(ConfigError(format!(
+                "tight_cost is {}; it must be finite and at least 1",
+                self.tight_cost
+            )));
+        }
         if self.rebuild_keyframes_per_scan == 0 {
             return Err(ConfigError(
                 "rebuild_keyframes_per_scan is 0; it must be at least 1".into(),
@@ -173,12 +209,14 @@ mod tests {
         assert_eq!(ExploreConfig::default().validate(), Ok(()));
         assert_eq!(ExploreConfig::default().plan_factor(), 2);
         type Spoil = fn(&mut ExploreConfig);
-        let cases: [(&str, Spoil); 5] = [
+        let cases: [(&str, Spoil); 7] = [
             ("vehicle_radius_m", |c| c.vehicle_radius_m = -0.1),
             ("lookahead_m", |c| c.lookahead_m = f32::NAN),
             ("clearance_margin_m", |c| c.clearance_margin_m = -1.0),
             ("plan_cell_m", |c| c.plan_cell_m = 0.07),
             ("grid", |c| c.grid.resolution_m = 0.0),
+            ("preferred_clearance_m", |c| c.preferred_clearance_m = 0.3),
+            ("tight_cost", |c| c.tight_cost = 0.5),
         ];
         for (field, spoil) in cases {
             let mut c = ExploreConfig::default();

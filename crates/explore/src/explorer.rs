@@ -68,6 +68,10 @@ struct Plan {
     pursued_since_s: f64,
     /// The window round the vehicle held no frontier; the plan is over the whole map.
     whole_map: bool,
+    /// The window's planning grid the path was planned on (`None` for a whole-map plan,
+    /// which was planned on the whole map's grid): the lookahead is checked on it, so the
+    /// space the path enters is as known to the check as to the plan.
+    window: Option<PlanGrid>,
 }
 
 pub struct Explorer {
@@ -249,10 +253,30 @@ impl Explorer {
         if let Some(reason) = self.done {
             return ExploreStep::Done(reason);
         }
-        match &self.plan {
-            Some(plan) => ExploreStep::Waypoint(plan.path.lookahead(p, self.config.lookahead_m)),
+        match self.plan.take() {
+            Some(plan) => {
+                let (distance_m, step_m) = (self.config.lookahead_m, self.config.plan_cell_m);
+                let w = match &plan.window {
+                    Some(g) => plan
+                        .path
+                        .lookahead_in_sight(p, distance_m, step_m, |a, b| g.leg_clear(a, b)),
+                    None => self.lookahead_on(&plan.path, p, distance_m),
+                };
+                self.plan = Some(plan);
+                ExploreStep::Waypoint(w)
+            }
             None => ExploreStep::Waypoint(p),
         }
+    }
+
+    /// The point `distance_m` along `path` ahead of `p`, or nearer where the straight leg to
+    /// it would cut a corner of the whole map's planning grid ([`PlanGrid::leg_clear`]): the
+    /// velocity field flies straight at it, so it must be in sight along a leg the path could
+    /// have taken. `path` must have been planned on that grid (the way home) or an older one.
+    pub fn lookahead_on(&mut self, path: &Path, p: Vec2, distance_m: f32) -> Vec2 {
+        let step_m = self.config.plan_cell_m;
+        let g = self.full_grid(false);
+        path.lookahead_in_sight(p, distance_m, step_m, |a, b| g.leg_clear(a, b))
     }
 
     /// The path from `pose` to the take-off point over the map's safe cells, with its length;
@@ -297,7 +321,7 @@ impl Explorer {
             .full
             .get_or_insert_with(|| {
                 let mut grid =
-                    PlanGrid::new(map.grid(), config.plan_factor(), config.r_min_m(), None);
+                    PlanGrid::new(map.grid(), config.plan_factor(), config.clearance(), None);
                 grid.block(blocked, config.blocked_radius_m);
                 let free_m2 = grid.free_area_m2();
                 stats.known_free_m2 = free_m2;
@@ -345,12 +369,13 @@ impl Explorer {
         let mut window = PlanGrid::new(
             self.map.grid(),
             config.plan_factor(),
-            config.r_min_m(),
+            config.clearance(),
             Some((p, config.plan_window_m)),
         );
         window.block(&self.blocked, config.blocked_radius_m);
         let mut plan = nearest_frontier(&window, p, &config, &self.given_up);
         let whole_map = plan.is_none();
+        let window = (!whole_map).then_some(window);
         if whole_map {
             self.stats.full_map_plans += 1;
             let given_up = std::mem::take(&mut self.given_up);
@@ -372,6 +397,7 @@ impl Explorer {
                     map_version: version,
                     pursued_since_s,
                     whole_map,
+                    window,
                 });
                 self.no_frontier_since = None;
                 self.last_empty = None;

@@ -25,9 +25,11 @@ impl Path {
     /// The path from `start` through the centres of `cells` (a search's result) to `end` if
     /// given, pulled taut over the safe cells: the grid's eight-direction zig-zag straightened
     /// and its corners rounded the way a string round a post is, so the length is that of
-    /// the shortest path to within a cell. The path stays on safe cells, so it comes no
-    /// closer to a mapped obstacle than `r_min` less half a cell's diagonal. A leg from a start or end point that is not on a safe
-    /// cell is kept as it is: it is the way out to safe space.
+    /// the shortest path to within a cell. Its legs pass [`PlanGrid::leg_clear`]: they stay
+    /// on safe cells, so the path comes no closer to a mapped obstacle than `r_min` less half
+    /// a cell's diagonal, and roomy stretches are not pulled into tight cells. A leg from a
+    /// start or end point that is not on a safe cell is kept as it is: it is the way out to
+    /// safe space.
     pub fn through(g: &PlanGrid, start: Vec2, cells: &[usize], end: Option<Vec2>) -> Self {
         let safe_at = |p: Vec2| g.index_of(p).is_some_and(|k| g.is_safe(k));
         let mut points = Vec::with_capacity(cells.len() + 2);
@@ -41,7 +43,7 @@ impl Path {
         // The first and last legs stay fixed unless their outer point is safe.
         let first = usize::from(!start_safe);
         let last = points.len() - 1 - usize::from(end.is_some() && !end_safe);
-        let clear = |a: Vec2, b: Vec2| g.segment_clear(a, b, |k| g.is_safe(k));
+        let clear = |a: Vec2, b: Vec2| g.leg_clear(a, b);
         let mut inner = shortcut(&points[first..=last], clear);
         tighten(&mut inner, g.cell_m(), clear);
         let inner = shortcut(&inner, clear);
@@ -55,10 +57,41 @@ impl Path {
     /// The point `distance_m` along the path beyond the point of the path nearest to `from`
     /// (the goal if the path is shorter); `from` itself for an empty path.
     pub fn lookahead(&self, from: Vec2, distance_m: f32) -> Vec2 {
+        self.lookahead_in_sight(from, distance_m, distance_m, |_, _| true)
+    }
+
+    /// Like [`Self::lookahead`], but the point is brought back toward the vehicle in steps of
+    /// `step_m` until `in_sight(from, point)` holds (at least one step ahead): round a corner
+    /// the point a full lookahead ahead lies across the corner, and a vehicle drawn straight at
+    /// it would cut the corner the path goes round.
+    pub fn lookahead_in_sight(
+        &self,
+        from: Vec2,
+        distance_m: f32,
+        step_m: f32,
+        in_sight: impl Fn(Vec2, Vec2) -> bool,
+    ) -> Vec2 {
         let Some(&first) = self.waypoints.first() else {
             return from;
         };
-        // The nearest point: segment index and the distance along the path to it.
+        if self.waypoints.len() == 1 {
+            return first;
+        }
+        let nearest = self.nearest_arc_m(from);
+        let step_m = if step_m > 0.0 { step_m } else { distance_m };
+        let mut ahead = distance_m;
+        while ahead > step_m {
+            let q = self.point_at(nearest + ahead);
+            if in_sight(from, q) {
+                return q;
+            }
+            ahead -= step_m;
+        }
+        self.point_at(nearest + ahead.max(0.0))
+    }
+
+    /// Arc length from the start to the point of the path nearest to `from`, m.
+    fn nearest_arc_m(&self, from: Vec2) -> f32 {
         let mut best = (f32::INFINITY, 0.0f32);
         let mut along = 0.0;
         for w in self.waypoints.windows(2) {
@@ -75,10 +108,7 @@ impl Path {
             }
             along += len;
         }
-        if self.waypoints.len() == 1 {
-            return first;
-        }
-        self.point_at(best.1 + distance_m)
+        best.1
     }
 
     /// The point at arc length `s_m` from the start, clamped to the ends.

@@ -7,6 +7,12 @@
 //! cell's square comes within `r_min` of its centre; measuring to the square rather than the
 //! centre means the grid can only make a gap look narrower than it is, never wider, so a gap
 //! narrower than `2 r_min` never has a safe cell in it.
+//!
+//! A safe cell is also *roomy* when it keeps the preferred clearance ([`PlanGrid::prefer`]),
+//! the clearance guard's own radius: searches charge more for a step onto a safe cell that is
+//! not roomy, so paths keep the guard's clearance wherever the map has room and come as close as
+//! `r_min` only where they must (a door narrower than twice the preferred clearance), and the
+//! guard does not have to fight the path round every corner.
 
 use plumbline_core::geom::Vec2;
 use plumbline_slam::grid::{Cell, CellState, OccupancyGrid};
@@ -19,6 +25,10 @@ pub struct PlanGrid {
     cell_m: f32,
     states: Vec<CellState>,
     safe: Vec<bool>,
+    /// Safe and at least the preferred clearance from every obstacle.
+    roomy: Vec<bool>,
+    /// Cost of a step onto a safe cell that is not roomy, per metre of step.
+    tight_cost: f32,
     free_cells: usize,
     /// Width of the border that is never safe and never a frontier, cells.
     margin: usize,
@@ -34,9 +44,10 @@ impl PlanGrid {
     pub fn new(
         grid: &OccupancyGrid,
         factor: i32,
-        r_min_m: f32,
+        clearance: Clearance,
         window: Option<(Vec2, f32)>,
     ) -> Self {
+        let r_min_m = clearance.r_min_m;
         let cell_m = grid.frame().resolution_m() * factor as f32;
         let Some(bounds) = grid.bounds() else {
             return Self::unknown(cell_m);
@@ -76,6 +87,7 @@ impl PlanGrid {
         let mut plan = Self::from_states(origin, width, height, cell_m, states)
             .unwrap_or_else(|| Self::unknown(cell_m));
         plan.inflate(r_min_m);
+        plan.prefer(clearance.preferred_m, clearance.tight_cost);
         plan.set_border(margin as usize);
         plan
     }
@@ -86,6 +98,7 @@ impl PlanGrid {
         for k in 0..self.states.len() {
             if !self.in_core(k) {
                 self.safe[k] = false;
+                self.roomy[k] = false;
             }
         }
     }
@@ -106,13 +119,16 @@ impl PlanGrid {
             cell_m,
             states: vec![CellState::Unknown],
             safe: vec![false],
+            roomy: vec![false],
+            tight_cost: 1.0,
             free_cells: 0,
             margin: 0,
         }
     }
 
     /// A planning grid from cell states given row by row (row 0 at the bottom), with no
-    /// obstacle growth yet; `origin` is the planning-cell index of the first cell. `None`
+    /// obstacle growth yet (every free cell safe and roomy); `origin` is the planning-cell
+    /// index of the first cell. `None`
     /// unless there is one state per cell and the cell size is finite and positive.
     pub fn from_states(
         origin: Cell,
@@ -132,6 +148,8 @@ impl PlanGrid {
             height,
             cell_m,
             states,
+            roomy: safe.clone(),
+            tight_cost: 1.0,
             safe,
             free_cells,
             margin: 0,
@@ -141,12 +159,37 @@ impl PlanGrid {
     /// Marks unsafe every free cell whose centre lies within `r_min_m` of an occupied cell's
     /// square.
     pub fn inflate(&mut self, r_min_m: f32) {
-        let reach = (r_min_m / self.cell_m).ceil() as i32 + 1;
+        let mut unsafe_cells = vec![false; self.len()];
+        self.mark_within(r_min_m, &mut unsafe_cells);
+        for (k, near) in unsafe_cells.into_iter().enumerate() {
+            if near {
+                self.safe[k] = false;
+                self.roomy[k] = false;
+            }
+        }
+    }
+
+    /// Marks not roomy every cell whose centre lies within `preferred_m` of an occupied cell's
+    /// square, and makes a step onto a safe cell that is not roomy cost `tight_cost` (at least
+    /// 1) times its length.
+    pub fn prefer(&mut self, preferred_m: f32, tight_cost: f32) {
+        let mut near = vec![false; self.len()];
+        self.mark_within(preferred_m, &mut near);
+        for (roomy, near) in self.roomy.iter_mut().zip(near) {
+            *roomy &= !near;
+        }
+        self.tight_cost = tight_cost.max(1.0);
+    }
+
+    /// Sets `out[k]` for every cell whose centre lies within `radius_m` of an occupied cell's
+    /// square.
+    fn mark_within(&self, radius_m: f32, out: &mut [bool]) {
+        let reach = (radius_m / self.cell_m).ceil() as i32 + 1;
         let mut offsets = Vec::new();
         for dj in -reach..=reach {
             for di in -reach..=reach {
                 let gap = |d: i32| ((d.abs() as f32) - 0.5).max(0.0) * self.cell_m;
-                if gap(di).hypot(gap(dj)) < r_min_m {
+                if gap(di).hypot(gap(dj)) < radius_m {
                     offsets.push((di, dj));
                 }
             }
@@ -158,7 +201,7 @@ impl PlanGrid {
             let (i, j) = self.coords(k);
             for &(di, dj) in &offsets {
                 if let Some(n) = self.index(i + di, j + dj) {
-                    self.safe[n] = false;
+                    out[n] = true;
                 }
             }
         }
@@ -175,6 +218,7 @@ impl PlanGrid {
             let c = self.center(k);
             if places.iter().any(|&q| (c - q).norm() <= radius_m) {
                 self.safe[k] = false;
+                self.roomy[k] = false;
             }
         }
     }
@@ -206,6 +250,35 @@ impl PlanGrid {
     /// Free and at least `r_min` from every mapped obstacle.
     pub fn is_safe(&self, k: usize) -> bool {
         self.safe[k]
+    }
+
+    /// Safe and at least the preferred clearance from every mapped obstacle.
+    pub fn is_roomy(&self, k: usize) -> bool {
+        self.roomy[k]
+    }
+
+    /// Cost per metre of a step onto cell `k`: 1 on a roomy cell, the tight cost on a safe
+    /// cell that is not roomy.
+    pub fn step_cost(&self, k: usize) -> f32 {
+        if self.roomy[k] {
+            1.0
+        } else {
+            self.tight_cost
+        }
+    }
+
+    /// Whether a straight leg from `a` to `b` may be flown: it crosses safe cells only, and
+    /// between its end cells keeps to roomy ones unless both ends lie on cells that are not
+    /// roomy (a leg inside a door). A leg from roomy space into a tight place therefore
+    /// follows the searched cells rather than cutting the corner the preferred clearance goes
+    /// round.
+    pub fn leg_clear(&self, a: Vec2, b: Vec2) -> bool {
+        let (ka, kb) = (self.index_of(a), self.index_of(b));
+        let tight = |k: Option<usize>| k.is_some_and(|k| !self.roomy[k]);
+        let inside = tight(ka) && tight(kb);
+        self.segment_clear(a, b, |k| {
+            self.safe[k] && (self.roomy[k] || inside || Some(k) == ka || Some(k) == kb)
+        })
     }
 
     /// Known free area in the planned area and its border, m².
@@ -305,6 +378,17 @@ impl PlanGrid {
         }
         self.index(i, j).is_some_and(&ok) && self.index(end.0, end.1).is_some_and(&ok)
     }
+}
+
+/// How far plans keep from mapped obstacles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clearance {
+    /// No planned cell comes closer, m.
+    pub r_min_m: f32,
+    /// Plans keep this much where the map has room, m (at least `r_min_m`).
+    pub preferred_m: f32,
+    /// Cost per metre of a step closer than the preferred clearance (at least 1).
+    pub tight_cost: f32,
 }
 
 /// A planning cell's state so far merged with one more map cell's.

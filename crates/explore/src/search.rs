@@ -1,5 +1,7 @@
 //! Shortest paths over the safe cells of a planning grid: A* (Dijkstra when the heuristic is
-//! zero), eight neighbours, never cutting the corner of an unsafe cell.
+//! zero), eight neighbours, never cutting the corner of an unsafe cell. A step costs its length
+//! times the grid's step cost of the cell it enters (more where the preferred clearance is not
+//! kept), so the path is the cheapest, which is the shortest where the map has room.
 
 use crate::plan_grid::PlanGrid;
 use plumbline_core::geom::Vec2;
@@ -7,8 +9,8 @@ use plumbline_slam::grid::CellState;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-/// The cells of a shortest path, from a start cell to the first goal cell reached, and its
-/// cost (the entry cost of the start plus the cell steps), m.
+/// The cells of a cheapest path, from a start cell to the first goal cell reached, and its
+/// cost (the entry cost of the start plus the weighted cell steps), m.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Found {
     pub cells: Vec<usize>,
@@ -39,8 +41,9 @@ impl PartialOrd for Open {
 }
 
 /// Searches from `starts` (cells with the cost of getting to them, m) over safe cells to the
-/// nearest cell where `is_goal` holds. `heuristic` must never exceed the true remaining cost
-/// (zero gives Dijkstra and the nearest goal by path length).
+/// cheapest cell where `is_goal` holds. `heuristic` must never exceed the true remaining cost
+/// (the straight-line distance never does; zero gives Dijkstra and the nearest goal by
+/// weighted path length).
 pub fn search(
     g: &PlanGrid,
     starts: &[(usize, f32)],
@@ -102,7 +105,7 @@ pub fn search(
                 } else {
                     step
                 };
-                let c = cost[cell] + d;
+                let c = cost[cell] + d * g.step_cost(n);
                 if c < cost[n] {
                     cost[n] = c;
                     parent[n] = cell;

@@ -51,7 +51,12 @@ fn the_frontier_of_a_room_with_a_door_is_the_door() {
     let walls = room_with_door(1.2);
     let mut e = explorer(&walls, &INSIDE);
     let config = ExploreConfig::default();
-    let g = PlanGrid::new(e.map().grid(), config.plan_factor(), config.r_min_m(), None);
+    let g = PlanGrid::new(
+        e.map().grid(),
+        config.plan_factor(),
+        config.clearance(),
+        None,
+    );
     let f = clusters(&g, 4);
     assert!(!f.clusters.is_empty());
     for c in &f.clusters {
@@ -292,12 +297,13 @@ fn a_place_the_vehicle_was_stuck_at_is_planned_round_and_a_way_with_none_left_is
     e.set_home(Vec2::new(1.0, 1.0));
     let low = e.path_home(at(7.0, 1.0)).unwrap();
     assert!((low.length_m - 6.0).abs() < 0.1, "{low:?}");
-    // Stuck in the low door: the way home is through the high one, at its lowest safe point
-    // (y = 2.4 + r_min = 2.8): (7,1) to (4,2.8) to (1,1), 7.0 m, give or take a cell.
+    // Stuck in the low door: the way home is through the high one, at its lowest point that
+    // keeps the preferred clearance (y = 2.4 + 0.5 = 2.9): (7,1) to (4,2.9) to (1,1), 7.1 m,
+    // give or take a cell.
     e.block(Vec2::new(4.0, 1.0));
     let high = e.path_home(at(7.0, 1.0)).unwrap();
-    let r_min = ExploreConfig::default().r_min_m();
-    let via_high = 2.0 * 3.0f32.hypot(1.4 + r_min);
+    let preferred = ExploreConfig::default().preferred_clearance_m;
+    let via_high = 2.0 * 3.0f32.hypot(1.4 + preferred);
     assert!((high.length_m - via_high).abs() < 0.15, "{high:?}");
     assert!(high
         .waypoints

@@ -8,7 +8,11 @@
 //!
 //! A walker coming straight on faster than the vehicle flies cannot be outrun along its line;
 //! the candidates across its way are the ones that leave its disc, and the side with the room
-//! to do so is the one that survives the guard.
+//! to do so is the one that survives the guard. The guard only limits a candidate now; over the
+//! horizon the vehicle also stops where the candidate's line comes within `r_min` of a wall, so
+//! each candidate's motion is cut short there when its contact risk is judged: running ahead of
+//! a walker toward the wall at the end of its way looks safe for the first second and is a
+//! trap.
 
 use super::config::GuidanceConfig;
 use super::guard::guard_velocity;
@@ -52,12 +56,19 @@ pub(super) fn evade<const N: usize, I: Iterator<Item = (Vec2, f32)>>(
         let d = Vec2::new(cosf(a), sinf(a));
         [d * v_max, d * (0.5 * v_max)]
     });
+    let hits = || {
+        (0..sweep.len())
+            .filter(|&pos| sweep.is_usable(pos))
+            .map(|pos| (sweep.unit(pos), sweep.range_m(pos)))
+            .chain(remembered())
+    };
     let mut best = (f32::INFINITY, Vec2::ZERO);
     for candidate in core::iter::once(wish).chain(compass).chain([Vec2::ZERO]) {
         let (v, _) = guard_velocity(candidate, sweep, &remembered, cfg);
         let switch = side.is_some_and(|s| s * side_of(v, mover) < 0.0);
+        let free_m = free_travel_m(v, hits(), cfg.r_min_m());
         let cost = (v - wish).norm_squared() / (v_max * v_max)
-            + CONTACT_WEIGHT * contact_risk(v, mover, cfg)
+            + CONTACT_WEIGHT * contact_risk(v, free_m, mover, cfg)
             + if switch { SIDE_SWITCH_COST } else { 0.0 };
         if cost < best.0 {
             best = (cost, v);
@@ -83,20 +94,101 @@ fn side_of(v: Vec2, mover: &Mover) -> f32 {
     }
 }
 
+/// How far the vehicle can fly along `v` before its centre comes within `r_min_m` of one of
+/// `hits` (unit direction and range, sensor frame), m: 0 when it is already that close to a
+/// hit ahead, infinite for zero velocity or open space.
+pub fn free_travel_m(v: Vec2, hits: impl Iterator<Item = (Vec2, f32)>, r_min_m: f32) -> f32 {
+    let speed = v.norm();
+    if speed <= 0.0 {
+        return f32::INFINITY;
+    }
+    let e = v * (1.0 / speed);
+    let mut free = f32::INFINITY;
+    for (u, range) in hits {
+        let ahead = u.dot(e) * range;
+        if ahead <= 0.0 {
+            continue;
+        }
+        // Along the line, the distance to the hit is r_min where s² − 2·ahead·s + range² − r² = 0.
+        let disc = ahead * ahead - range * range + r_min_m * r_min_m;
+        if disc >= 0.0 {
+            free = free.min((ahead - libm::sqrtf(disc)).max(0.0));
+        }
+    }
+    free
+}
+
 /// How deep flying `v` takes the vehicle into the mover's disc within the horizon, as a share
-/// of the disc's radius: 0 when it stays out. The disc grows with time by what the mover's
+/// of the disc's radius: 0 when it stays out. The vehicle flies `v` for at most `free_m` (where
+/// a wall stops it, [`free_travel_m`]) and then stays put while the mover walks on. The disc grows with time by what the mover's
 /// estimated velocity may be off ([`SPEED_UNCERTAINTY_M_S`]), so crossing close in front of a
 /// walker counts as the gamble it is; and it is the deepest point, not the first touch, so that
 /// inside the disc the way out that the mover's own motion opens (across its way) beats backing
 /// off along it.
-pub fn contact_risk(v: Vec2, mover: &Mover, cfg: &GuidanceConfig) -> f32 {
+pub fn contact_risk(v: Vec2, free_m: f32, mover: &Mover, cfg: &GuidanceConfig) -> f32 {
     let reach = cfg.r_min_m() + mover.half_width_m;
-    let relative = v - mover.velocity_m_s;
+    let speed = v.norm();
+    let stop_s = if speed > 0.0 {
+        free_m / speed
+    } else {
+        f32::INFINITY
+    };
     let mut deepest = 0.0f32;
     for k in 0..=RISK_SAMPLES {
         let t = cfg.evade_horizon_s * k as f32 / RISK_SAMPLES as f32;
-        let distance = (mover.centre_m - relative * t).norm();
+        let flown = v * t.min(stop_s);
+        let distance = (mover.centre_m + mover.velocity_m_s * t - flown).norm();
         deepest = deepest.max(reach + SPEED_UNCERTAINTY_M_S * t - distance);
     }
     deepest / reach
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn free_travel_ends_where_the_line_comes_within_r_min_of_a_hit() {
+        let ahead = (Vec2::new(1.0, 0.0), 1.5);
+        let behind = (Vec2::new(-1.0, 0.0), 0.6);
+        let beside = (Vec2::new(0.0, 1.0), 0.6);
+        let v = Vec2::new(0.4, 0.0);
+        let free = free_travel_m(v, [ahead, behind, beside].into_iter(), 0.5);
+        assert!((free - 1.0).abs() < 1e-5, "{free}");
+        // A hit off the line by more than r_min never stops the vehicle; nor does zero speed.
+        let off = (Vec2::new(0.6, 0.8), 1.0);
+        assert_eq!(free_travel_m(v, [off].into_iter(), 0.5), f32::INFINITY);
+        assert_eq!(
+            free_travel_m(Vec2::ZERO, [ahead].into_iter(), 0.5),
+            f32::INFINITY
+        );
+        // Already inside r_min of a hit ahead: no travel at all.
+        assert_eq!(
+            free_travel_m(v, [(Vec2::new(1.0, 0.0), 0.3)].into_iter(), 0.5),
+            0.0
+        );
+    }
+
+    #[test]
+    fn running_ahead_of_a_faster_walker_into_a_wall_is_judged_the_trap_it_is() {
+        let cfg = GuidanceConfig::default();
+        // A walker 1.6 m behind, coming on at 0.7 m/s; the vehicle flies away at 0.5 m/s.
+        let walker = Mover {
+            unit: Vec2::new(1.0, 0.0),
+            range_m: 1.35,
+            closing_m_s: 0.7,
+            centre_m: Vec2::new(1.6, 0.0),
+            half_width_m: 0.25,
+            velocity_m_s: Vec2::new(-0.7, 0.0),
+        };
+        let away = Vec2::new(-0.5, 0.0);
+        let open = contact_risk(away, f32::INFINITY, &walker, &cfg);
+        // A wall 1 m ahead stops the vehicle after 0.5 m; the walker keeps coming.
+        let walled = contact_risk(away, 0.5, &walker, &cfg);
+        assert!(walled > open + 0.3, "open {open}, walled {walled}");
+        // Stepping across the walker's way is then the better choice.
+        let across = Vec2::new(0.0, 0.5);
+        let aside = contact_risk(across, f32::INFINITY, &walker, &cfg);
+        assert!(aside < walled, "aside {aside}, walled {walled}");
+    }
 }

@@ -307,7 +307,10 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
             });
             return;
         }
-        let target: Vec2 = path.map_or(home, |path| path.lookahead(p, HOME_LOOKAHEAD_M));
+        let target: Vec2 = path.map_or(home, |path| {
+            let mut explorer = self.explorer.borrow_mut();
+            explorer.lookahead_on(&path, p, HOME_LOOKAHEAD_M)
+        });
         let mode = GuidanceMode::TowardWaypoint {
             world_m: [target.x, target.y],
         };

@@ -41,6 +41,7 @@ fn prepare(options: &Options, config: &mut SimConfig) -> Result<Flight, Scenario
     };
     let explore_config = ExploreConfig {
         vehicle_radius_m: radius_m,
+        preferred_clearance_m: guidance.r_min_m(),
         ..ExploreConfig::default()
     };
     let setup = |e: String| ScenarioError::Setup(SetupError::Config(e));
