@@ -8,27 +8,18 @@
 //! reports for the scan then stays the pose at its stamp.
 
 use plumbline_core::geom::Pose2;
+use plumbline_core::scan::sweep::SweepMotion;
 use plumbline_core::scan::Scan;
 
-/// Constant body velocity over one revolution, in the frame of the sensor at its first beam.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SweepMotion {
-    pub velocity_m_s: [f32; 2],
-    pub yaw_rate_rad_s: f32,
-}
-
-impl SweepMotion {
-    /// The rate of `motion` (a relative pose) taken over `dt_s`; `None` when the interval is not
-    /// positive or the result not finite.
-    pub fn from_motion(motion: Pose2, dt_s: f32) -> Option<Self> {
-        let rate = Self {
-            velocity_m_s: [motion.x / dt_s, motion.y / dt_s],
-            yaw_rate_rad_s: motion.theta / dt_s,
-        };
-        let finite =
-            rate.velocity_m_s.iter().all(|v| v.is_finite()) && rate.yaw_rate_rad_s.is_finite();
-        (dt_s > 0.0 && finite).then_some(rate)
-    }
+/// The constant rate of `motion` (a relative pose, in the frame of its start) over `dt_s`;
+/// `None` when the interval is not positive or the result not finite.
+pub fn rate_of(motion: Pose2, dt_s: f32) -> Option<SweepMotion> {
+    let rate = SweepMotion {
+        velocity_m_s: [motion.x / dt_s, motion.y / dt_s],
+        yaw_rate_rad_s: motion.theta / dt_s,
+    };
+    let finite = rate.velocity_m_s.iter().all(|v| v.is_finite()) && rate.yaw_rate_rad_s.is_finite();
+    (dt_s > 0.0 && finite).then_some(rate)
 }
 
 /// Poses of the last scans, for the rate the next revolution is de-skewed with.
@@ -71,7 +62,7 @@ impl MotionHistory {
         let (dx, dy) = (to.x - from.x, to.y - from.y);
         let turn = from.between(to).theta;
         let travel = Pose2::new(c * dx + s * dy, c * dy - s * dx, turn);
-        SweepMotion::from_motion(travel, (t1 - t0) as f32)
+        rate_of(travel, (t1 - t0) as f32)
     }
 }
 
@@ -160,7 +151,7 @@ mod tests {
         let (v, w) = ([0.8, -0.3], 0.6);
         let raw = smeared(v, w);
         let mut fixed = Scan::new(0.0);
-        let motion = SweepMotion::from_motion(Pose2::new(v[0] * 0.5, v[1] * 0.5, w * 0.5), 0.5);
+        let motion = rate_of(Pose2::new(v[0] * 0.5, v[1] * 0.5, w * 0.5), 0.5);
         deskew(&raw, motion.unwrap(), &mut fixed);
         let (before, after) = (worst_off_the_walls(&raw), worst_off_the_walls(&fixed));
         assert!(before > 0.1, "the test scan is not smeared: {before} m");
@@ -178,7 +169,7 @@ mod tests {
     #[test]
     fn de_skewed_bearings_stay_in_order_and_within_a_turn() {
         let mut fixed = Scan::new(0.0);
-        let motion = SweepMotion::from_motion(Pose2::new(1.0, 0.0, 0.0), 0.5).unwrap();
+        let motion = rate_of(Pose2::new(1.0, 0.0, 0.0), 0.5).unwrap();
         deskew(&smeared([2.0, 0.0], 0.0), motion, &mut fixed);
         let valid: Vec<f32> = fixed
             .beams()
@@ -217,7 +208,7 @@ mod tests {
         let mut scan: Scan<4> = Scan::new(0.0);
         scan.push(Beam::new(0.0, 1.0)).unwrap();
         assert!(!is_timed(&scan));
-        assert!(SweepMotion::from_motion(Pose2::new(1.0, 0.0, 0.0), 0.0).is_none());
-        assert!(SweepMotion::from_motion(Pose2::new(f32::NAN, 0.0, 0.0), 0.1).is_none());
+        assert!(rate_of(Pose2::new(1.0, 0.0, 0.0), 0.0).is_none());
+        assert!(rate_of(Pose2::new(f32::NAN, 0.0, 0.0), 0.1).is_none());
     }
 }

@@ -3,13 +3,14 @@
 //! It owns no global state, so its cost per scan stays flat however large the map grows.
 
 use crate::config::SlamConfig;
-use crate::deskew::{deskew, is_timed, MotionHistory, SweepMotion};
+use crate::deskew::{deskew, is_timed, rate_of, MotionHistory};
 use crate::guard::{Guarded, GuessGuard};
 use crate::keyframe::Keyframe;
 use crate::observed::Observed;
 use plumbline_core::geom::Pose2;
 use plumbline_core::matching::local_map::{LineMap, MapCell, MapUse, MappedOdometry};
 use plumbline_core::matching::OdometryStep;
+use plumbline_core::scan::sweep::SweepMotion;
 use plumbline_core::scan::Scan;
 
 /// What tracking made of one scan.
@@ -110,9 +111,7 @@ impl<'m, const N: usize> Tracker<'m, N> {
             prior.filter(|p| p.is_finite()),
             self.history.newest_stamp_s(),
         ) {
-            (Some(prior), Some(last_s)) => {
-                SweepMotion::from_motion(prior, (scan.stamp_s - last_s) as f32)
-            }
+            (Some(prior), Some(last_s)) => rate_of(prior, (scan.stamp_s - last_s) as f32),
             _ => self.history.rate(),
         }
     }
