@@ -68,10 +68,6 @@ struct Plan {
     pursued_since_s: f64,
     /// The window round the vehicle held no frontier; the plan is over the whole map.
     whole_map: bool,
-    /// The window's planning grid the path was planned on (`None` for a whole-map plan,
-    /// which was planned on the whole map's grid): the lookahead is checked on it, so the
-    /// space the path enters is as known to the check as to the plan.
-    window: Option<PlanGrid>,
 }
 
 pub struct Explorer {
@@ -253,14 +249,19 @@ impl Explorer {
         if let Some(reason) = self.done {
             return ExploreStep::Done(reason);
         }
+        // A plan within the window leads to a frontier a few metres off, across space the
+        // lidar sees now, and its look-ahead is taken as it is. Held back to the legs the
+        // window's grid allows, it collapsed to one step whenever a weaving vehicle stood
+        // nearer a wall than plans like to keep, so flights down a corridor being explored
+        // crawled and left its unobserved axis unmeasured for longer. A whole-map plan may
+        // lead round corners far away, so its look-ahead is held in sight.
+        let distance_m = self.config.lookahead_m;
         match self.plan.take() {
             Some(plan) => {
-                let (distance_m, step_m) = (self.config.lookahead_m, self.config.plan_cell_m);
-                let w = match &plan.window {
-                    Some(g) => plan
-                        .path
-                        .lookahead_in_sight(p, distance_m, step_m, |a, b| g.leg_clear(a, b)),
-                    None => self.lookahead_on(&plan.path, p, distance_m),
+                let w = if plan.whole_map {
+                    self.lookahead_on(&plan.path, p, distance_m)
+                } else {
+                    plan.path.lookahead(p, distance_m)
                 };
                 self.plan = Some(plan);
                 ExploreStep::Waypoint(w)
@@ -375,7 +376,6 @@ impl Explorer {
         window.block(&self.blocked, config.blocked_radius_m);
         let mut plan = nearest_frontier(&window, p, &config, &self.given_up);
         let whole_map = plan.is_none();
-        let window = (!whole_map).then_some(window);
         if whole_map {
             self.stats.full_map_plans += 1;
             let given_up = std::mem::take(&mut self.given_up);
@@ -397,7 +397,6 @@ impl Explorer {
                     map_version: version,
                     pursued_since_s,
                     whole_map,
-                    window,
                 });
                 self.no_frontier_since = None;
                 self.last_empty = None;

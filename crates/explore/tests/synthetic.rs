@@ -313,3 +313,32 @@ fn a_place_the_vehicle_was_stuck_at_is_planned_round_and_a_way_with_none_left_is
     e.block(Vec2::new(4.0, 3.0));
     assert_eq!(e.path_home(at(7.0, 1.0)), None);
 }
+
+#[test]
+fn off_the_centre_line_of_a_corridor_being_explored_the_look_ahead_is_not_cut_short() {
+    // A 2 m corridor running on past the lidar's range: the frontier lies down it. A weaving
+    // vehicle 0.45 m from a wall stands nearer than plans like to keep (0.5 m), and its
+    // waypoint must still be a full look-ahead on along the path: held back to what the grid
+    // shows in sight from there, it came back to the vehicle and the flight crawled.
+    let walls = vec![
+        [0.0, 0.0, 30.0, 0.0],
+        [0.0, 2.0, 30.0, 2.0],
+        [0.0, 0.0, 0.0, 2.0],
+    ];
+    let from = at(1.5, 0.45);
+    let mut e = explorer(&walls, &[at(1.0, 1.0), from]);
+    let ExploreStep::Waypoint(w) = e.next(from) else {
+        panic!("a corridor to explore is not done");
+    };
+    let goal = e.goal().unwrap();
+    assert!(
+        goal.x > from.x + 1.0,
+        "goal {goal:?} is not down the corridor"
+    );
+    let ahead = (w - Vec2::new(from.x, from.y)).norm();
+    let lookahead_m = ExploreConfig::default().lookahead_m;
+    assert!(
+        ahead > 0.9 * lookahead_m,
+        "look-ahead {ahead:.2} m, at {w:?}"
+    );
+}
