@@ -23,8 +23,20 @@ pub struct OdometryConfig {
     pub keyframe_distance_m: f32,
     /// …or turning this much, rad.
     pub keyframe_angle_rad: f32,
-    /// …or when fewer than this fraction of points still find a partner in it.
+    /// …or when fewer than this fraction of points still find a partner in it…
     pub keyframe_min_inlier_ratio: f32,
+    /// …or when the match was constrained this unevenly or worse (its `conditioning`, least
+    /// over most translational information) and the next scan, if the vehicle keeps moving as
+    /// over the last interval, would lie farther than `keyframe_reach_m` from the keyframe.
+    /// In a corridor the motion along it rests on a few wall ends; with scans far apart (a slow
+    /// scan rate, a fast vehicle, a thinned log) the next one would be matched a keyframe
+    /// spacing plus a whole step away, where those ends pair with the wrong neighbours and the
+    /// match slides along the corridor. Taking the keyframe a scan early keeps such matches
+    /// within the reach; where walls run both ways the match holds farther out and no extra
+    /// keyframe is paid for. A conditioning of 0 or a reach of infinity: off.
+    pub keyframe_reach_below_conditioning: f32,
+    /// The reach above, m.
+    pub keyframe_reach_m: f32,
     /// While lost (matches failing in a row, no prior), each failed scan moves the pose by this
     /// fraction of the motion used for the one before; the first failed scan by the whole last
     /// motion. In [0, 1): 0 stops at once, 0.5 bounds the whole excursion to twice the last motion.
@@ -38,6 +50,8 @@ impl Default for OdometryConfig {
             keyframe_distance_m: 0.3,
             keyframe_angle_rad: 0.25,
             keyframe_min_inlier_ratio: 0.6,
+            keyframe_reach_below_conditioning: 0.0,
+            keyframe_reach_m: f32::INFINITY,
             lost_motion_decay: 0.5,
         }
     }
@@ -151,9 +165,15 @@ impl<const N: usize> LidarOdometry<N> {
                 self.last_motion = self.pose.between(new_pose);
                 self.pose = new_pose;
                 let (dist, angle) = self.keyframe_pose.distance_to(new_pose);
+                let beyond_reach = || {
+                    let next = new_pose.compose(self.last_motion);
+                    result.quality.conditioning < self.config.keyframe_reach_below_conditioning
+                        && self.keyframe_pose.distance_to(next).0 > self.config.keyframe_reach_m
+                };
                 let new_keyframe = dist > self.config.keyframe_distance_m
                     || angle > self.config.keyframe_angle_rad
-                    || result.quality.inlier_ratio < self.config.keyframe_min_inlier_ratio;
+                    || result.quality.inlier_ratio < self.config.keyframe_min_inlier_ratio
+                    || beyond_reach();
                 if new_keyframe {
                     self.matcher.promote_current();
                     self.keyframe_pose = new_pose;
