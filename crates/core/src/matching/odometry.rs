@@ -294,14 +294,56 @@ mod tests {
         );
     }
 
+    #[test]
+    fn a_keyframe_is_taken_a_scan_early_only_when_the_next_would_be_out_of_reach() {
+        // Moving 0.2 m a scan, keyframes every 0.3 m: the second scan would be matched 0.4 m
+        // from the first keyframe. A reach of 0.35 m takes the keyframe at the first scan, but
+        // only for matches conditioned below the gate (a box's always are, below 1.01).
+        for (gate, reach, early) in [
+            (0.0, f32::INFINITY, false),
+            (1.01, 0.35, true),
+            (1.01, 0.45, false),
+            (0.0, 0.35, false),
+        ] {
+            let config = OdometryConfig {
+                keyframe_reach_below_conditioning: gate,
+                keyframe_reach_m: reach,
+                ..OdometryConfig::default()
+            };
+            let mut odometry = LidarOdometry::<360>::new(config);
+            assert_eq!(
+                odometry.update(&room_at(0.0, 0.0), None),
+                OdometryStep::Started
+            );
+            // The prior is the true motion: the test is about the keyframe, not the match.
+            let step = odometry.update(&room_at(0.2, 0.0), Some(Pose2::new(0.2, 0.0, 0.0)));
+            let OdometryStep::Matched { new_keyframe, .. } = step else {
+                panic!("the box should match: {step:?}");
+            };
+            assert_eq!(new_keyframe, early, "gate {gate}, reach {reach}");
+            assert!(
+                (odometry.pose().x - 0.2).abs() < 0.01,
+                "{:?}",
+                odometry.pose()
+            );
+        }
+    }
+
     /// A 360-beam scan of a 6 m x 4 m box taken from its centre, turned by `theta`.
     fn room(theta: f32) -> Scan<360> {
+        room_at(0.0, theta)
+    }
+
+    /// The same box seen from `x` m along its long axis.
+    fn room_at(x: f32, theta: f32) -> Scan<360> {
         let mut scan = Scan::new(0.0);
         for k in 0..360 {
             let a = (k as f32).to_radians();
             let (s, c) = libm::sincosf(a + theta);
-            let wx = if c.abs() > 1e-6 {
-                3.0 / c.abs()
+            let wx = if c > 1e-6 {
+                (3.0 - x) / c
+            } else if c < -1e-6 {
+                (3.0 + x) / -c
             } else {
                 f32::INFINITY
             };
