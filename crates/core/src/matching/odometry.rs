@@ -33,8 +33,20 @@ pub struct OdometryConfig {
     pub keyframe_distance_m: f32,
     /// …or turning this much, rad.
     pub keyframe_angle_rad: f32,
-    /// …or when fewer than this fraction of points still find a partner in it.
+    /// …or when fewer than this fraction of points still find a partner in it…
     pub keyframe_min_inlier_ratio: f32,
+    /// …or when the match was constrained this unevenly or worse (its `conditioning`, least
+    /// over most translational information) and the next scan, if the vehicle keeps moving as
+    /// over the last interval, would lie farther than `keyframe_reach_m` from the keyframe.
+    /// In a corridor the motion along it rests on a few wall ends; with scans far apart (a slow
+    /// scan rate, a fast vehicle, a thinned log) the next one would be matched a keyframe
+    /// spacing plus a whole step away, where those ends pair with the wrong neighbours and the
+    /// match slides along the corridor. Taking the keyframe a scan early keeps such matches
+    /// within the reach; where walls run both ways the match holds farther out and no extra
+    /// keyframe is paid for. A conditioning of 0 or a reach of infinity: off.
+    pub keyframe_reach_below_conditioning: f32,
+    /// The reach above, m.
+    pub keyframe_reach_m: f32,
     /// While lost (matches failing in a row, no prior), each failed scan moves the pose by this
     /// fraction of the motion used for the one before; the first failed scan by the whole last
     /// motion. In [0, 1): 0 stops at once, 0.5 bounds the whole excursion to twice the last motion.
@@ -88,6 +100,8 @@ impl Default for OdometryConfig {
             keyframe_distance_m: 0.3,
             keyframe_angle_rad: 0.25,
             keyframe_min_inlier_ratio: 0.6,
+            keyframe_reach_below_conditioning: 0.0,
+            keyframe_reach_m: f32::INFINITY,
             lost_motion_decay: 0.5,
             motion_limits: Some(MotionLimits::default()),
         }
@@ -229,9 +243,15 @@ impl<const N: usize> LidarOdometry<N> {
                 self.last_motion = self.pose.between(new_pose);
                 self.pose = new_pose;
                 let (dist, angle) = self.keyframe_pose.distance_to(new_pose);
+                let beyond_reach = || {
+                    let next = new_pose.compose(self.last_motion);
+                    result.quality.conditioning < self.config.keyframe_reach_below_conditioning
+                        && self.keyframe_pose.distance_to(next).0 > self.config.keyframe_reach_m
+                };
                 let new_keyframe = dist > self.config.keyframe_distance_m
                     || angle > self.config.keyframe_angle_rad
-                    || result.quality.inlier_ratio < self.config.keyframe_min_inlier_ratio;
+                    || result.quality.inlier_ratio < self.config.keyframe_min_inlier_ratio
+                    || beyond_reach();
                 if new_keyframe {
                     self.matcher.promote_current();
                     self.keyframe_pose = new_pose;
@@ -372,14 +392,56 @@ mod tests {
         );
     }
 
+    #[test]
+    fn a_keyframe_is_taken_a_scan_early_only_when_the_next_would_be_out_of_reach() {
+        // Moving 0.2 m a scan, keyframes every 0.3 m: the second scan would be matched 0.4 m
+        // from the first keyframe. A reach of 0.35 m takes the keyframe at the first scan, but
+        // only for matches conditioned below the gate (a box's always are, below 1.01).
+        for (gate, reach, early) in [
+            (0.0, f32::INFINITY, false),
+            (1.01, 0.35, true),
+            (1.01, 0.45, false),
+            (0.0, 0.35, false),
+        ] {
+            let config = OdometryConfig {
+                keyframe_reach_below_conditioning: gate,
+                keyframe_reach_m: reach,
+                ..OdometryConfig::default()
+            };
+            let mut odometry = LidarOdometry::<360>::new(config);
+            assert_eq!(
+                odometry.update(&room_at(0.0, 0.0), None),
+                OdometryStep::Started
+            );
+            // The prior is the true motion: the test is about the keyframe, not the match.
+            let step = odometry.update(&room_at(0.2, 0.0), Some(Pose2::new(0.2, 0.0, 0.0)));
+            let OdometryStep::Matched { new_keyframe, .. } = step else {
+                panic!("the box should match: {step:?}");
+            };
+            assert_eq!(new_keyframe, early, "gate {gate}, reach {reach}");
+            assert!(
+                (odometry.pose().x - 0.2).abs() < 0.01,
+                "{:?}",
+                odometry.pose()
+            );
+        }
+    }
+
     /// A 360-beam scan of a 6 m x 4 m box taken from its centre, turned by `theta`.
     fn room(theta: f32) -> Scan<360> {
+        room_at(0.0, theta)
+    }
+
+    /// The same box seen from `x` m along its long axis.
+    fn room_at(x: f32, theta: f32) -> Scan<360> {
         let mut scan = Scan::new(0.0);
         for k in 0..360 {
             let a = (k as f32).to_radians();
             let (s, c) = libm::sincosf(a + theta);
-            let wx = if c.abs() > 1e-6 {
-                3.0 / c.abs()
+            let wx = if c > 1e-6 {
+                (3.0 - x) / c
+            } else if c < -1e-6 {
+                (3.0 + x) / -c
             } else {
                 f32::INFINITY
             };
