@@ -295,8 +295,10 @@ fn a_slowly_spinning_lidar_named_with_lidar_is_de_skewed_and_maps_closer_to_the_
         deskewed < 0.1,
         "{deskewed} m de-skewed, {skewed} m as taken"
     );
+    // (Naming the lidar also turns on the matcher's localizability check, which on this seed
+    // costs the de-skewed map 0.081 -> 0.098 m while it lowers the ten-seed mean and worst.)
     assert!(
-        deskewed < 0.6 * skewed,
+        deskewed < 0.7 * skewed,
         "{deskewed} m de-skewed, {skewed} m as taken"
     );
     assert!(!unknown.status.success());
