@@ -14,7 +14,7 @@ use plumbline_core::matching::local_map::{
     RelocalizeConfig,
 };
 use plumbline_core::matching::{
-    LidarOdometry, MatchConfig, MatcherKind, OdometryConfig, OdometryStep,
+    LidarOdometry, MatchConfig, MatchError, MatcherKind, OdometryConfig, OdometryStep,
 };
 use plumbline_core::scan::Scan;
 use plumbline_io::carmen::{open_log, OdomPose};
@@ -150,6 +150,8 @@ pub fn run(args: OdometryArgs) -> CliResult {
     let mut plot = plot_out.as_ref().map(|_| TrajectoryPlot::new());
     let mut times_us = Vec::new();
     let (mut failed, mut keyframes, mut degenerate, mut rejected) = (0usize, 0usize, 0usize, 0u64);
+    // Failed matches that converged somewhere the motion cannot have reached.
+    let mut implausible = 0usize;
     let (mut recovered, mut iterations) = (0usize, 0u64);
     let mut first_failure: Option<String> = None;
     let mut scan: Box<Scan<MAX_BEAMS>> = Box::default();
@@ -200,6 +202,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
             }
             OdometryStep::Predicted { error, .. } => {
                 failed += 1;
+                implausible += usize::from(matches!(error, MatchError::Implausible { .. }));
                 first_failure.get_or_insert_with(|| {
                     format!("scan {scans} at {}: {error}", rec.timestamp_text)
                 });
@@ -253,6 +256,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
         "median_match_us": percentile(&times_us, 0.5),
         "p99_match_us": percentile(&times_us, 0.99),
         "failed_matches": failed,
+        "implausible_matches": implausible,
         "lost_scans": lost.scans,
         "lost_intervals": lost.intervals,
         "lost_s": lost.seconds,

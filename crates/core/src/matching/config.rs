@@ -72,6 +72,16 @@ pub struct MatchConfig {
     /// measure the direction, it is still reported degenerate with its variance unobserved, so
     /// an estimator fusing the match keeps ignoring it.
     pub degenerate_point_passes: u16,
+    /// A converged line-metric match whose conditioning (least over most translational
+    /// information) is below this has its weakest direction checked for points that face it;
+    /// with fewer than `min_facing_points` within `facing_max_angle_rad` of it, the direction is
+    /// degenerate after all (held at the guess, then measured as above). 0 (the default) turns
+    /// the check off: it is for lidars whose range noise tilts the fitted normals by several
+    /// degrees (the XV-11); on the SICK logs small-angle structure is real information.
+    pub localizability_check_below: f32,
+
+    pub facing_max_angle_rad: f32,
+    pub min_facing_points: u16,
     /// Seed 000 sec. 4.2: a point is dynamic or an outlier when its cost J at the initial guess
     /// exceeds `gain * (dx_prev^2 + dy_prev^2) + floor^2`.
     pub dynamic_rejection: bool,
@@ -118,6 +128,10 @@ impl Default for MatchConfig {
             convergence_rad: 5e-4,
             degenerate_ratio: 0.02,
             degenerate_point_passes: 5,
+            localizability_check_below: 0.0,
+
+            facing_max_angle_rad: core::f32::consts::FRAC_PI_3,
+            min_facing_points: 12,
             dynamic_rejection: true,
             dynamic_gain: 4.0,
             dynamic_floor_m: 0.2,

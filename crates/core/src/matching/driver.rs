@@ -1,7 +1,7 @@
 //! The iteration shared by `icl`, `plicp` and `icp`: associate, solve, keep degenerate
 //! directions at the guess, test convergence and divergence, then report quality.
 
-use super::associate::{associate, Partners, PassGate, PassStats};
+use super::associate::{associate, Partners, PassGate, PassStats, NO_PARTNER};
 use super::config::MatchConfig;
 use super::linalg::sym2_eigen;
 use super::metrics::Solve;
@@ -117,6 +117,12 @@ pub fn run<S: Solve, const N: usize>(
         }
         previous_step = Some(step);
     }
+    if degenerate.is_none() && !S::TO_POINT && cfg.localizability_check_below > 0.0 {
+        degenerate = unsupported_direction(reference, current, pose, &last, cfg, partners);
+        if let Some(v) = degenerate {
+            pose = hold_along(pose, guess, v);
+        }
+    }
     Ok(report(
         pose,
         &last,
@@ -141,6 +147,69 @@ fn converged(step: f32, previous: Option<f32>) -> bool {
         ratio < 1.0 && step * ratio / (1.0 - ratio) < 1.0
     };
     step < 1.0 || previous.is_some_and(settles)
+}
+
+/// `pose` with its translation along the unit `v` moved back to where `guess` put it (Zhang,
+/// Kaess and Singh's solution remapping: along a direction the data do not constrain, the
+/// prior is kept and only the constrained part of the solution is used).
+pub(super) fn hold_along(pose: Pose2, guess: Pose2, v: Vec2) -> Pose2 {
+    let along = v * v.dot(pose.translation() - guess.translation());
+    Pose2::new(pose.x - along.x, pose.y - along.y, pose.theta)
+}
+
+/// The least-constrained translation direction of a converged match when too few of its
+/// points face along it for the motion along it to be measured, if so.
+///
+/// The eigenvalue test alone ([`degenerate_direction`]) is fooled by noise: in a room or
+/// corridor lined with parallel walls, the fitted normals of noisy points tilt by a few degrees,
+/// and each tilted line lends the direction a little information that is really the offset of
+/// the point along its wall. Summed over a scan it passes the ratio test, and the matches it
+/// gives slide along the walls by tenths of a metre (the simulator's XV-11 surveys of long
+/// rooms). What does measure motion along a direction is a surface facing it (a wall end, a
+/// door frame, a corner), so a direction counts as measured only when at least
+/// [`MatchConfig::min_facing_points`] matched points have normals within
+/// [`MatchConfig::facing_max_angle_rad`] of it (the per-point view of localizability used by
+/// X-ICP, Tuna et al. 2023). The count runs only for matches whose conditioning is below
+/// [`MatchConfig::localizability_check_below`], so well-constrained matches pay nothing.
+fn unsupported_direction<const N: usize>(
+    reference: &PreparedScan<N>,
+    current: &PreparedScan<N>,
+    pose: Pose2,
+    stats: &PassStats,
+    cfg: &MatchConfig,
+    partners: &[u16],
+) -> Option<Vec2> {
+    let (a, b, c) = stats.information.translation_schur();
+    let (hi, lo, v) = sym2_eigen(a, b, c);
+    if hi.is_nan() || hi <= 0.0 || lo >= cfg.localizability_check_below * hi {
+        return None;
+    }
+    let min_cos = libm::cosf(cfg.facing_max_angle_rad);
+    let gate_m = (cfg.gate_sigmas * stats.robust_sigma.max(MIN_SIGMA_M))
+        .clamp(cfg.min_gate_m, cfg.max_correspondence_m);
+    let (s, co) = (libm::sinf(pose.theta), libm::cosf(pose.theta));
+    let t = pose.translation();
+    let mut facing = 0u16;
+    for (&p, &j) in current.points().iter().zip(partners) {
+        if j == NO_PARTNER {
+            continue;
+        }
+        let j = j as usize;
+        let Some(n) = reference.line(j).normal() else {
+            continue;
+        };
+        if libm::fabsf(n.dot(v)) < min_cos {
+            continue;
+        }
+        let q = Vec2::new(co * p.x - s * p.y, s * p.x + co * p.y) + t;
+        if libm::fabsf(n.dot(q - reference.point(j))) <= gate_m {
+            facing += 1;
+            if facing >= cfg.min_facing_points {
+                return None;
+            }
+        }
+    }
+    Some(v)
 }
 
 /// The translation direction the pass's information does not pin down, if any.

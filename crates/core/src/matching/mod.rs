@@ -24,7 +24,7 @@ mod window;
 
 pub use config::{MatchConfig, MatcherKind};
 pub use icl_paper::{closest_point_on_line, PaperMatch, PaperRejection};
-pub use odometry::{LidarOdometry, OdometryConfig, OdometryStep};
+pub use odometry::{LidarOdometry, MotionLimits, OdometryConfig, OdometryStep};
 pub use prepared::PreparedScan;
 pub use result::{MatchError, MatchQuality, MatchResult, MatchStatus, UNOBSERVED_VARIANCE};
 
@@ -189,6 +189,15 @@ impl<const N: usize> ScanMatcher<N> {
             }
         }
         let mut result = result?;
+        if let (true, Some(v)) = (
+            result.quality.recovered,
+            result.quality.degenerate_direction,
+        ) {
+            // The search's scores are as flat along a degenerate direction as the match's
+            // information, so where along it the search started says nothing: the caller's
+            // guess stays the prior there, as it does for a match made from the guess itself.
+            result.motion = driver::hold_along(result.motion, guess, v);
+        }
         if cfg.kind == MatcherKind::Icl {
             fill_degenerate_direction(reference, current, &mut result, prev, cfg, &mut *partners);
         }

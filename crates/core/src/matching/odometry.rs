@@ -11,6 +11,16 @@
 //! failed scan in a row carries the pose forward by a shrinking fraction of the last motion
 //! ([`OdometryConfig::lost_motion_decay`]), so however long the sensor stays lost the predicted
 //! pose moves at most `1 / (1 - decay)` times the last motion, and comes to rest.
+//!
+//! A match that converged can still be wrong: when the matcher's recovery search restarts it
+//! from a pose of its own (a poor fit from the prediction), it can settle tenths of a metre
+//! away along walls that barely constrain it. Such a match is checked against what the vehicle
+//! can have done since the last scan that matched ([`MotionLimits`]): a pose farther from the
+//! prediction than that acceleration allows is refused, bridged by the prediction like a
+//! failed match, and counted. Matches made from the prediction itself are not checked: with
+//! lidar alone the prediction is the last motion repeated, and refusing a good match for
+//! disagreeing with it keeps the stale motion (on the simulated XV-11 surveys that flew the
+//! estimate metres off, and Intel lost 37 good scans).
 
 use super::{MatchConfig, MatchError, MatchResult, ScanMatcher};
 use crate::geom::{Pose2, Vec2};
@@ -41,6 +51,46 @@ pub struct OdometryConfig {
     /// fraction of the motion used for the one before; the first failed scan by the whole last
     /// motion. In [0, 1): 0 stops at once, 0.5 bounds the whole excursion to twice the last motion.
     pub lost_motion_decay: f32,
+    /// What the vehicle can do between scans; a match beyond it is refused. `None`: no check.
+    pub motion_limits: Option<MotionLimits>,
+}
+
+/// How far a vehicle can stray from the predicted motion (the prior, or the last motion
+/// repeated) in `dt` seconds: `floor + accel * dt² / 2`, in metres and radians. The floor holds
+/// what the prediction itself gets wrong (a noisy last motion, a prior's error).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotionLimits {
+    pub floor_m: f32,
+    pub accel_m_s2: f32,
+    pub floor_rad: f32,
+    pub accel_rad_s2: f32,
+}
+
+impl Default for MotionLimits {
+    /// Generous for an indoor quadcopter or a ground robot (3 m/s², 10 rad/s²), with a floor
+    /// of 5 cm and 0.05 rad for the prediction's own error.
+    fn default() -> Self {
+        Self {
+            floor_m: 0.05,
+            accel_m_s2: 3.0,
+            floor_rad: 0.05,
+            accel_rad_s2: 10.0,
+        }
+    }
+}
+
+impl MotionLimits {
+    /// Whether a pose `shift_m` and `turn_rad` away from the prediction made `dt_s` after the
+    /// last matched scan is within reach. A gap that is not a positive finite time (a log
+    /// without usable stamps) allows anything.
+    pub fn allows(&self, shift_m: f32, turn_rad: f32, dt_s: f32) -> bool {
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return true;
+        }
+        let reach = |floor: f32, accel: f32| floor + 0.5 * accel * dt_s * dt_s;
+        shift_m <= reach(self.floor_m, self.accel_m_s2)
+            && turn_rad <= reach(self.floor_rad, self.accel_rad_s2)
+    }
 }
 
 impl Default for OdometryConfig {
@@ -53,6 +103,7 @@ impl Default for OdometryConfig {
             keyframe_reach_below_conditioning: 0.0,
             keyframe_reach_m: f32::INFINITY,
             lost_motion_decay: 0.5,
+            motion_limits: Some(MotionLimits::default()),
         }
     }
 }
@@ -98,6 +149,10 @@ pub struct LidarOdometry<const N: usize> {
     /// `lost_motion_decay` after each failed match.
     last_motion: Pose2,
     keyframes_taken: u32,
+    /// Stamp of the last scan whose match was taken, s.
+    last_matched_s: f64,
+    /// Matches refused by [`MotionLimits`] so far.
+    implausible: u32,
 }
 
 impl<const N: usize> LidarOdometry<N> {
@@ -109,6 +164,8 @@ impl<const N: usize> LidarOdometry<N> {
             pose: Pose2::IDENTITY,
             last_motion: Pose2::IDENTITY,
             keyframes_taken: 0,
+            last_matched_s: f64::NAN,
+            implausible: 0,
         }
     }
 
@@ -135,6 +192,11 @@ impl<const N: usize> LidarOdometry<N> {
         self.pose = pose;
     }
 
+    /// How many matches were refused as beyond what the motion can do (see [`MotionLimits`]).
+    pub fn implausible_matches(&self) -> u32 {
+        self.implausible
+    }
+
     /// Current pose estimate in the frame of the first scan.
     pub fn pose(&self) -> Pose2 {
         self.pose
@@ -146,6 +208,7 @@ impl<const N: usize> LidarOdometry<N> {
         if !self.matcher.has_reference() {
             return match self.matcher.set_reference(scan) {
                 Ok(()) => {
+                    self.last_matched_s = scan.stamp_s;
                     self.keyframe_pose = self.pose;
                     self.keyframes_taken = self.keyframes_taken.wrapping_add(1);
                     OdometryStep::Started
@@ -159,8 +222,23 @@ impl<const N: usize> LidarOdometry<N> {
         let predicted_motion = prior.filter(|p| p.is_finite()).unwrap_or(self.last_motion);
         let predicted = self.pose.compose(predicted_motion);
         let guess = self.keyframe_pose.between(predicted);
-        match self.matcher.match_scan(scan, guess) {
+        let dt_s = (scan.stamp_s - self.last_matched_s) as f32;
+        let matched = self.matcher.match_scan(scan, guess).and_then(|result| {
+            let (shift, turn) = predicted.distance_to(self.keyframe_pose.compose(result.motion));
+            match self.config.motion_limits {
+                Some(limits) if result.quality.recovered && !limits.allows(shift, turn, dt_s) => {
+                    self.implausible = self.implausible.saturating_add(1);
+                    Err(MatchError::Implausible {
+                        shift_m: shift,
+                        turn_rad: turn,
+                    })
+                }
+                _ => Ok(result),
+            }
+        });
+        match matched {
             Ok(result) => {
+                self.last_matched_s = scan.stamp_s;
                 let new_pose = self.keyframe_pose.compose(result.motion);
                 self.last_motion = self.pose.between(new_pose);
                 self.pose = new_pose;
@@ -186,10 +264,16 @@ impl<const N: usize> LidarOdometry<N> {
             }
             Err(error) => {
                 self.pose = predicted;
-                self.last_motion = fraction_of(self.last_motion, self.lost_decay());
+                // A refused match says the scan fitted somewhere it cannot be, not that the
+                // vehicle stopped: the motion carries on undecayed, against the same keyframe.
+                if !matches!(error, MatchError::Implausible { .. }) {
+                    self.last_motion = fraction_of(self.last_motion, self.lost_decay());
+                }
                 let restarted = !matches!(
                     error,
-                    MatchError::TooFewPoints { .. } | MatchError::BeamsNotInAngularOrder { .. }
+                    MatchError::TooFewPoints { .. }
+                        | MatchError::BeamsNotInAngularOrder { .. }
+                        | MatchError::Implausible { .. }
                 ) && self.matcher.set_reference(scan).is_ok();
                 if restarted {
                     self.keyframe_pose = predicted;
@@ -278,6 +362,20 @@ mod tests {
                 last_step < 1e-3,
                 "decay {decay}: still turning {last_step} rad a scan"
             );
+        }
+    }
+
+    #[test]
+    fn the_motion_limits_reach_grows_with_the_gap_and_a_bad_gap_limits_nothing() {
+        let limits = MotionLimits::default();
+        // 0.25 s (one XV-11 revolution): 5 cm + 3 m/s² * 0.25² / 2 = 14.4 cm.
+        assert!(limits.allows(0.14, 0.0, 0.25));
+        assert!(!limits.allows(0.15, 0.0, 0.25));
+        assert!(!limits.allows(0.0, 0.40, 0.25));
+        // A gap of a second reaches 1.55 m and 5.05 rad.
+        assert!(limits.allows(1.5, 0.40, 1.0));
+        for dt in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert!(limits.allows(100.0, 100.0, dt), "dt {dt}");
         }
     }
 

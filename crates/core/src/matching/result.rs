@@ -74,6 +74,12 @@ pub enum MatchError {
     NonFiniteGuess,
     /// The solution ran away from the guess or stopped being finite.
     Diverged,
+    /// The match converged farther from the predicted pose than the vehicle can have moved
+    /// since the last scan that matched (refused by the odometry's motion limits).
+    Implausible {
+        shift_m: f32,
+        turn_rad: f32,
+    },
 }
 
 impl From<PrepareError> for MatchError {
@@ -105,6 +111,10 @@ impl core::fmt::Display for MatchError {
             }
             MatchError::NonFiniteGuess => write!(f, "initial guess is not finite"),
             MatchError::Diverged => write!(f, "solution diverged from the initial guess"),
+            MatchError::Implausible { shift_m, turn_rad } => write!(
+                f,
+                "match {shift_m:.3} m and {turn_rad:.3} rad from the prediction, beyond what the motion allows"
+            ),
         }
     }
 }
