@@ -159,7 +159,7 @@ impl Coverage {
             (p[0] - self.origin[0]) / COVERAGE_CELL_M,
             (p[1] - self.origin[1]) / COVERAGE_CELL_M,
         ];
-        let mut cell = [rel[0].floor() as isize, rel[1].floor() as isize];
+        let cell = [rel[0].floor() as isize, rel[1].floor() as isize];
         let step = [d[0].signum() as isize, d[1].signum() as isize];
         let axis_next = |r: f64, c: isize, s: isize, dir: f64| {
             if dir == 0.0 {
@@ -169,25 +169,37 @@ impl Coverage {
                 (edge - r) * COVERAGE_CELL_M / dir
             }
         };
-        let mut t_next = [
+        let (mut tx, mut ty) = (
             axis_next(rel[0], cell[0], step[0], d[0]),
             axis_next(rel[1], cell[1], step[1], d[1]),
-        ];
-        // Infinite along an axis the ray does not move on.
-        let t_delta = [COVERAGE_CELL_M / d[0].abs(), COVERAGE_CELL_M / d[1].abs()];
+        );
+        // Infinite along an axis the ray does not move on. Kept in locals rather than arrays
+        // indexed by the axis: through memory each step would wait on the store of the last.
+        let (dx, dy) = (COVERAGE_CELL_M / d[0].abs(), COVERAGE_CELL_M / d[1].abs());
+        let (mut cx, mut cy) = (cell[0], cell[1]);
+        let (nx, ny) = (self.nx as isize, self.ny as isize);
         loop {
             self.mark(i);
-            let axis = usize::from(t_next[1] < t_next[0]);
-            if t_next[axis] > reach {
-                return;
+            if ty < tx {
+                if ty > reach {
+                    return;
+                }
+                ty += dy;
+                cy += step[1];
+                if cy < 0 || cy >= ny {
+                    return;
+                }
+            } else {
+                if tx > reach {
+                    return;
+                }
+                tx += dx;
+                cx += step[0];
+                if cx < 0 || cx >= nx {
+                    return;
+                }
             }
-            t_next[axis] += t_delta[axis];
-            cell[axis] += step[axis];
-            let (nx, ny) = (self.nx as isize, self.ny as isize);
-            if cell[0] < 0 || cell[1] < 0 || cell[0] >= nx || cell[1] >= ny {
-                return;
-            }
-            i = cell[1] as usize * self.nx + cell[0] as usize;
+            i = (cy * nx + cx) as usize;
         }
     }
 
