@@ -26,10 +26,15 @@ pub const NO_CLUSTER: u32 = u32::MAX;
 /// Whether cell `k` is a frontier: free, with an unknown cell above, below, left or right.
 /// (The diagonal is left out: behind a wall's corner it would make every corner a frontier.)
 pub fn is_frontier(g: &PlanGrid, k: usize) -> bool {
-    if g.state(k) != CellState::Free || !g.in_core(k) {
+    let (i, j) = g.coords(k);
+    frontier_at(g, i, j, k)
+}
+
+/// [`is_frontier`] of cell `k` at column `i`, row `j`.
+fn frontier_at(g: &PlanGrid, i: i32, j: i32, k: usize) -> bool {
+    if g.state(k) != CellState::Free || !g.in_core_at(i, j) {
         return false;
     }
-    let (i, j) = g.coords(k);
     [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|&(di, dj)| {
         g.index(i + di, j + dj)
             .is_some_and(|n| g.state(n) == CellState::Unknown)
@@ -38,7 +43,12 @@ pub fn is_frontier(g: &PlanGrid, k: usize) -> bool {
 
 /// The frontier clusters of at least `min_cells` cells (touching in the eight directions).
 pub fn clusters(g: &PlanGrid, min_cells: usize) -> Frontiers {
-    let frontier: Vec<bool> = (0..g.len()).map(|k| is_frontier(g, k)).collect();
+    let (w, h) = (g.width() as i32, g.height() as i32);
+    let frontier: Vec<bool> = (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
+        .enumerate()
+        .map(|(k, (i, j))| frontier_at(g, i, j, k))
+        .collect();
     let mut cluster_of = vec![NO_CLUSTER; g.len()];
     let mut seen = vec![false; g.len()];
     let mut clusters = Vec::new();

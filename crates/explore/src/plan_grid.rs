@@ -77,11 +77,21 @@ impl PlanGrid {
             ((origin.i + width as i32) * factor - 1).min(bounds.max.i),
             ((origin.j + height as i32) * factor - 1).min(bounds.max.j),
         );
+        // The planning column is carried along the row rather than divided out of each map
+        // cell's column, and an occupied planning cell asks no more of its map cells.
+        let first_column = (fine_lo.i.div_euclid(factor) - origin.i) as usize;
+        let first_sub = fine_lo.i.rem_euclid(factor);
         for j in fine_lo.j..=fine_hi.j {
             let row = (j.div_euclid(factor) - origin.j) as usize * width;
+            let (mut k, mut sub) = (row + first_column, first_sub);
             for i in fine_lo.i..=fine_hi.i {
-                let k = row + (i.div_euclid(factor) - origin.i) as usize;
-                states[k] = merge(states[k], grid.state(Cell::new(i, j)));
+                if states[k] != CellState::Occupied {
+                    states[k] = merge(states[k], grid.state(Cell::new(i, j)));
+                }
+                sub += 1;
+                if sub == factor {
+                    (k, sub) = (k + 1, 0);
+                }
             }
         }
         let mut plan = Self::from_states(origin, width, height, cell_m, states)
@@ -95,18 +105,29 @@ impl PlanGrid {
     /// Makes the outer `margin` cells all round unsafe and no frontier.
     fn set_border(&mut self, margin: usize) {
         self.margin = margin;
-        for k in 0..self.states.len() {
-            if !self.in_core(k) {
-                self.safe[k] = false;
-                self.roomy[k] = false;
+        let (w, h) = (self.width, self.height);
+        for j in 0..h {
+            let row = j * w;
+            let edge = j < margin || j + margin >= h;
+            let (left, right) = if edge {
+                (0..w, 0..0)
+            } else {
+                (
+                    0..margin.min(w),
+                    w.saturating_sub(margin).max(margin.min(w))..w,
+                )
+            };
+            for i in left.chain(right) {
+                self.safe[row + i] = false;
+                self.roomy[row + i] = false;
             }
         }
     }
 
-    /// Whether cell `k` lies inside the border (see [`Self::new`]).
-    pub fn in_core(&self, k: usize) -> bool {
-        let (i, j) = (k % self.width, k / self.width);
-        let m = self.margin;
+    /// Whether the cell at column `i`, row `j` (inside the grid) lies inside the border (see
+    /// [`Self::new`]).
+    pub fn in_core_at(&self, i: i32, j: i32) -> bool {
+        let (i, j, m) = (i as usize, j as usize, self.margin);
         i >= m && j >= m && i + m < self.width && j + m < self.height
     }
 
@@ -185,23 +206,37 @@ impl PlanGrid {
     /// square.
     fn mark_within(&self, radius_m: f32, out: &mut [bool]) {
         let reach = (radius_m / self.cell_m).ceil() as i32 + 1;
-        let mut offsets = Vec::new();
-        for dj in -reach..=reach {
-            for di in -reach..=reach {
-                let gap = |d: i32| ((d.abs() as f32) - 0.5).max(0.0) * self.cell_m;
-                if gap(di).hypot(gap(dj)) < radius_m {
-                    offsets.push((di, dj));
-                }
-            }
-        }
-        for k in 0..self.states.len() {
-            if self.states[k] != CellState::Occupied {
-                continue;
-            }
+        // The gap to a square grows with the column offset, so each row of the disc is one
+        // run of columns, `-half..=half` (none where `half` is negative): a cell marks its
+        // disc a run at a time.
+        let gap = |d: i32| ((d.abs() as f32) - 0.5).max(0.0) * self.cell_m;
+        let rows: Vec<(i32, i32)> = (-reach..=reach)
+            .map(|dj| {
+                let half = (0..=reach)
+                    .take_while(|&di| gap(di).hypot(gap(dj)) < radius_m)
+                    .last()
+                    .unwrap_or(-1);
+                (dj, half)
+            })
+            .filter(|&(_, half)| half >= 0)
+            .collect();
+        let (w, h) = (self.width as i32, self.height as i32);
+        for (k, _) in self
+            .states
+            .iter()
+            .enumerate()
+            .filter(|(_, &s)| s == CellState::Occupied)
+        {
             let (i, j) = self.coords(k);
-            for &(di, dj) in &offsets {
-                if let Some(n) = self.index(i + di, j + dj) {
-                    out[n] = true;
+            for &(dj, half) in &rows {
+                let row = j + dj;
+                if row < 0 || row >= h {
+                    continue;
+                }
+                let (lo, hi) = ((i - half).max(0), (i + half).min(w - 1));
+                if lo <= hi {
+                    let at = row as usize * self.width;
+                    out[at + lo as usize..=at + hi as usize].fill(true);
                 }
             }
         }
@@ -410,4 +445,43 @@ pub fn block_state(grid: &OccupancyGrid, corner: Cell, factor: i32) -> CellState
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    proptest::proptest! {
+        /// A free cell is unsafe exactly when its centre lies within `r_min` of an occupied
+        /// cell's square, checked against every occupied cell, on random grids and radii.
+        #[test]
+        fn inflation_marks_every_centre_within_reach_of_an_occupied_square(
+            cells in proptest::collection::vec(0u8..10, 1..400),
+            width in 1usize..30,
+            r_min_m in 0.0f32..0.6,
+        ) {
+            let height = cells.len().div_ceil(width);
+            let states: Vec<CellState> = (0..width * height)
+                .map(|k| match cells.get(k).copied().unwrap_or(0) {
+                    0 => CellState::Occupied,
+                    1 => CellState::Unknown,
+                    _ => CellState::Free,
+                })
+                .collect();
+            let cell_m = 0.1;
+            let mut g = PlanGrid::from_states(Cell::new(-3, 2), width, height, cell_m, states)
+                .unwrap();
+            g.inflate(r_min_m);
+            for k in 0..g.len() {
+                let (i, j) = g.coords(k);
+                let near = (0..g.len()).filter(|&o| g.state(o) == CellState::Occupied).any(|o| {
+                    let (oi, oj) = g.coords(o);
+                    let gap = |d: i32| ((d.abs() as f32) - 0.5).max(0.0) * cell_m;
+                    gap(i - oi).hypot(gap(j - oj)) < r_min_m
+                });
+                let expected = g.state(k) == CellState::Free && !near;
+                proptest::prop_assert_eq!(g.is_safe(k), expected, "cell {} {}", i, j);
+            }
+        }
+    }
 }
