@@ -7,22 +7,12 @@
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use support::shared_data;
+
+mod support;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn shared_data() -> Option<PathBuf> {
-    let d = repo().join("../shared/data");
-    if d.is_dir() {
-        Some(d)
-    } else {
-        println!(
-            "skipped: {} does not exist (the full logs are not on this machine)",
-            d.display()
-        );
-        None
-    }
 }
 
 fn tmp(name: &str) -> PathBuf {

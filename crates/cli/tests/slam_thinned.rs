@@ -4,36 +4,10 @@
 //!
 //! The bound is the target's: at most twice the full-rate figure (0.018 m).
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod support;
 
-fn shared_data() -> Option<PathBuf> {
-    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    if d.is_dir() {
-        Some(d)
-    } else {
-        println!(
-            "skipped: {} does not exist (the full logs are not on this machine)",
-            d.display()
-        );
-        None
-    }
-}
-
-/// The last stdout line of a successful run, as JSON.
-fn ok(args: &[&str]) -> serde_json::Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_plumbline"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8(out.stdout).unwrap();
-    serde_json::from_str(stdout.lines().last().unwrap()).unwrap()
-}
+use std::path::Path;
+use support::{ok_json, shared_data};
 
 /// The log with only every `k`-th laser line kept (the first among them), other lines as they are.
 fn thinned(log: &Path, k: usize, out: &Path) {
@@ -62,9 +36,9 @@ fn intel_thinned_to_every_4th_and_8th_scan_stays_within_twice_the_full_rate_erro
         let traj = dir.join(format!("intel-every{k}.txt"));
         thinned(&d.join("intel-lab/intel-first5505.derived.clf"), k, &log);
         let (log, traj) = (log.to_str().unwrap(), traj.to_str().unwrap());
-        let summary = ok(&["slam", log, "--out", traj, "--json"]);
+        let summary = ok_json(&["slam", log, "--out", traj, "--json"]);
         let relations = d.join("intel-lab/intel.relations");
-        let eval = ok(&["eval", traj, relations.to_str().unwrap(), "--json"]);
+        let eval = ok_json(&["eval", traj, relations.to_str().unwrap(), "--json"]);
         println!("every {k}th: {summary}\n{eval}");
         // A scan or two may be bridged by prediction (Intel's stamps bunch, so two scans far
         // apart can carry stamps 0.1 s apart and a good match looks implausibly fast), but

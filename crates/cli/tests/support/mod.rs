@@ -17,6 +17,20 @@ pub fn excerpt() -> PathBuf {
     Path::new(REPO).join("data/intel-excerpt.clf")
 }
 
+/// The full benchmark logs beside the repository, or `None` after printing why the test skips.
+pub fn shared_data() -> Option<PathBuf> {
+    let d = Path::new(REPO).join("../shared/data");
+    if d.is_dir() {
+        Some(d)
+    } else {
+        println!(
+            "skipped: {} does not exist (the full logs are not on this machine)",
+            d.display()
+        );
+        None
+    }
+}
+
 /// A fresh, empty scratch directory for one test.
 pub fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("plumbline-hostile-{name}-{}", std::process::id()));
@@ -65,6 +79,13 @@ pub fn last_json(out: &Output) -> serde_json::Value {
             stderr(out)
         )
     })
+}
+
+/// Runs the binary, which must succeed, and returns its summary.
+pub fn ok_json(args: &[&str]) -> serde_json::Value {
+    let out = run(args);
+    assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+    last_json(&out)
 }
 
 /// The names in a directory, sorted (hidden ones too: a leftover staging file is a failure).
