@@ -14,7 +14,7 @@ use plumbline_core::matching::local_map::{
     RelocalizeConfig,
 };
 use plumbline_core::matching::{
-    LidarOdometry, MatchConfig, MatchError, MatcherKind, OdometryConfig, OdometryStep,
+    LidarOdometry, MatchConfig, MatchError, MatcherKind, MotionLimits, OdometryConfig, OdometryStep,
 };
 use plumbline_core::scan::Scan;
 use plumbline_io::carmen::{open_log, OdomPose};
@@ -106,6 +106,7 @@ pub fn run(args: OdometryArgs) -> CliResult {
         },
         keyframe_distance_m: args.keyframe_distance,
         keyframe_angle_rad: args.keyframe_angle_deg.to_radians(),
+        motion_limits: Some(MotionLimits::default()),
         ..OdometryConfig::default()
     };
     let map_config = LineMapConfig {

@@ -161,7 +161,7 @@ fn run_with<L: AutopilotLink>(
     view: Option<&View>,
 ) -> Result<Value, CliError> {
     let wall = Instant::now();
-    let config = SlamConfig::default();
+    let config = SlamConfig::in_flight();
     let mut cells = local_map_cells(&config);
     let slam = Slam::new(config, &mut cells, live).map_err(|e| CliError(e.0))?;
     let mut companion = Companion::new(slam, link);

@@ -79,8 +79,11 @@ pub struct MatchConfig {
     /// the check off: it is for lidars whose range noise tilts the fitted normals by several
     /// degrees (the XV-11); on the SICK logs small-angle structure is real information.
     pub localizability_check_below: f32,
-
+    /// How far a matched point's line normal may lean from the weak direction and still count
+    /// as facing it, rad. Default 60°: a door frame or corner seen obliquely still measures it.
     pub facing_max_angle_rad: f32,
+    /// Facing points needed for the weak direction to count as measured. Default 12, set on
+    /// the simulated XV-11 surveys.
     pub min_facing_points: u16,
     /// Seed 000 sec. 4.2: a point is dynamic or an outlier when its cost J at the initial guess
     /// exceeds `gain * (dx_prev^2 + dy_prev^2) + floor^2`.
@@ -129,7 +132,6 @@ impl Default for MatchConfig {
             degenerate_ratio: 0.02,
             degenerate_point_passes: 5,
             localizability_check_below: 0.0,
-
             facing_max_angle_rad: core::f32::consts::FRAC_PI_3,
             min_facing_points: 12,
             dynamic_rejection: true,

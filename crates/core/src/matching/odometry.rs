@@ -51,7 +51,10 @@ pub struct OdometryConfig {
     /// fraction of the motion used for the one before; the first failed scan by the whole last
     /// motion. In [0, 1): 0 stops at once, 0.5 bounds the whole excursion to twice the last motion.
     pub lost_motion_decay: f32,
-    /// What the vehicle can do between scans; a match beyond it is refused. `None`: no check.
+    /// What the vehicle can do between scans; a match beyond it is refused. `None` (the
+    /// default): no check. The log commands (`odometry`, `slam`) turn it on; the onboard stack
+    /// leaves it off, because it has been measured on logs and surveys but not in flight, where
+    /// it moved the simulated flights without a measured gain.
     pub motion_limits: Option<MotionLimits>,
 }
 
@@ -103,7 +106,7 @@ impl Default for OdometryConfig {
             keyframe_reach_below_conditioning: 0.0,
             keyframe_reach_m: f32::INFINITY,
             lost_motion_decay: 0.5,
-            motion_limits: Some(MotionLimits::default()),
+            motion_limits: None,
         }
     }
 }

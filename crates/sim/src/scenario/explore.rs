@@ -51,7 +51,7 @@ fn prepare(options: &Options, config: &mut SimConfig) -> Result<Flight, Scenario
     ));
     let companion = Rc::new(RefCell::new(CompanionLog::default()));
     let parts = CompanionParts {
-        slam: SlamConfig::default(),
+        slam: SlamConfig::in_flight(),
         explorer: explorer.clone(),
         guidance,
         strategy: options.strategy,
