@@ -2,7 +2,7 @@
 
 use crate::correlative::{CorrelativeConfig, Rival};
 use plumbline_core::matching::local_map::{LineMapConfig, RefineConfig};
-use plumbline_core::matching::{MatchConfig, MotionLimits, OdometryConfig};
+use plumbline_core::matching::{MatchConfig, OdometryConfig};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlamConfig {
@@ -59,7 +59,6 @@ impl Default for SlamConfig {
                 },
                 keyframe_reach_below_conditioning: 0.1,
                 keyframe_reach_m: 0.4,
-                motion_limits: Some(MotionLimits::default()),
                 ..OdometryConfig::default()
             },
             local_map: LineMapConfig::default(),
@@ -84,14 +83,13 @@ impl Default for SlamConfig {
 impl SlamConfig {
     /// SLAM on board a flying vehicle. Its scans come a revolution apart at walking speed
     /// (0.125 m at 4 Hz and 0.5 m/s), so the corridor keyframe rule, made for scans far apart,
-    /// has nothing to prevent; the motion limits are measured on logs, not in flight. Both still
-    /// changed nearly every simulated exploration flight, and over 100 office frontier flights
-    /// the flights with a contact rose from 3 to 12-15, so a flight keeps neither.
+    /// has nothing to prevent. It still changed nearly every simulated exploration flight, and
+    /// over 100 office frontier flights the flights with a contact rose from 3 to 12-15, so a
+    /// flight does without it.
     pub fn in_flight() -> Self {
         let mut config = Self::default();
         config.odometry.keyframe_reach_below_conditioning = 0.0;
         config.odometry.keyframe_reach_m = f32::INFINITY;
-        config.odometry.motion_limits = None;
         config
     }
 }
