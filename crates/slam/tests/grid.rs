@@ -267,3 +267,97 @@ fn a_few_hits_just_beyond_a_well_hit_wall_are_not_a_second_wall() {
         assert_eq!(g.state_at(Vec2::new(2.07, 0.01)), beyond, "{fraction}");
     }
 }
+
+/// A 1° scan from `pose` of a wall at x = 3.025 and, when `leg` is given, a post of radius
+/// 5 cm at that point (a person's leg): (angle, range) of every beam that hits either.
+fn wall_and_leg_scan(pose: Pose2, leg: Option<Vec2>) -> Vec<Beam> {
+    let (wall_x, radius) = (3.025f32, 0.05f32);
+    (-50..=50)
+        .filter_map(|k| {
+            let angle = (k as f32).to_radians();
+            let (s, c) = (pose.theta + angle).sin_cos();
+            let to_wall = (c > 0.0).then(|| (wall_x - pose.x) / c);
+            let to_leg = leg.and_then(|l| {
+                // The nearer root of |pose + t (c, s) - l| = radius, if the ray meets the post.
+                let (dx, dy) = (pose.x - l.x, pose.y - l.y);
+                let b = dx * c + dy * s;
+                let disc = b * b - (dx * dx + dy * dy - radius * radius);
+                (disc >= 0.0).then(|| -b - disc.sqrt()).filter(|&t| t > 0.0)
+            });
+            let range = match (to_wall, to_leg) {
+                (Some(w), Some(l)) => w.min(l),
+                (w, l) => w.or(l)?,
+            };
+            Some(Beam::new(angle, range))
+        })
+        .collect()
+}
+
+#[test]
+fn scans_that_see_through_a_passer_by_clear_it_and_leave_the_wall() {
+    let leg = Vec2::new(1.5, 0.02);
+    let caught = Pose2::new(0.0, 0.0, 0.0);
+    // Keyframes: one catches the leg in front of the wall; two closer ones see only the wall
+    // (from x = 2 they cannot look back at the leg), so each wall cell ahead has several hits.
+    let build = |times_caught: usize| {
+        let mut g = grid();
+        for _ in 0..times_caught {
+            g.insert_scan(caught, &wall_and_leg_scan(caught, Some(leg)), 10.0)
+                .unwrap();
+        }
+        for y in [0.0, 0.01] {
+            let pose = Pose2::new(2.0, y, 0.0);
+            g.insert_scan(pose, &wall_and_leg_scan(pose, None), 10.0)
+                .unwrap();
+        }
+        g
+    };
+    let leg_cells = |g: &OccupancyGrid| -> Vec<(f32, f32)> {
+        g.occupied_cells()
+            .map(|c| g.frame().center(c))
+            .filter(|p| (*p - leg).norm() < 0.15)
+            .map(|p| (p.x, p.y))
+            .collect()
+    };
+    // The later scans, from beside where the leg was caught, after the person walked on.
+    let later: Vec<(Pose2, PreparedScan)> = (1..=6)
+        .map(|k| {
+            let pose = Pose2::new(0.0, 0.03 * k as f32 - 0.1, 0.0);
+            let scan = PreparedScan::from_beams(&wall_and_leg_scan(pose, None), 10.0, None);
+            (pose, scan.unwrap())
+        })
+        .collect();
+    let wall_cells = |g: &OccupancyGrid| -> usize {
+        (-8..=8)
+            .filter(|&k| g.state_at(Vec2::new(3.03, 0.05 * k as f32)) == CellState::Occupied)
+            .count()
+    };
+
+    let mut g = build(1);
+    assert!(
+        !leg_cells(&g).is_empty(),
+        "the keyframes alone keep the leg"
+    );
+    assert_eq!(wall_cells(&g), 17);
+    let bounds = g.bounds();
+    for (pose, scan) in &later {
+        g.see_through(*pose, scan, 2).unwrap();
+    }
+    assert_eq!(leg_cells(&g), vec![], "seen through, the leg is gone");
+    assert_ne!(g.state_at(leg), CellState::Occupied);
+    assert_eq!(wall_cells(&g), 17, "the wall behind it stays");
+    assert_eq!(g.bounds(), bounds, "seeing through adds no area");
+
+    // An object three keyframes caught is not something passing by: it stays.
+    let mut g = build(3);
+    let before = leg_cells(&g);
+    for (pose, scan) in &later {
+        g.see_through(*pose, scan, 2).unwrap();
+    }
+    assert!(!before.is_empty());
+    assert_eq!(leg_cells(&g), before);
+    assert_eq!(
+        g.see_through(Pose2::new(f32::NAN, 0.0, 0.0), &later[0].1, 2),
+        Err(GridError::NonFinitePose)
+    );
+}
