@@ -31,6 +31,11 @@ const TRANSIENT_MAX_HITS: u16 = 2;
 /// add little and would cost memory (8 bytes a beam: a 40 Hz UTM-30LX would keep 350 kB/s).
 const SEEN_THROUGH_INTERVAL_S: f64 = 0.2;
 
+/// Most heap bytes the kept scans may hold (about 1.5 hours of XV-11 scans at 5 Hz). A longer
+/// log drops every other kept scan and keeps them twice as far apart from then on, so memory
+/// stays bounded however long the log; a passer-by is then cleared by fewer scans.
+const SEEN_THROUGH_MAX_BYTES: usize = 64 << 20;
+
 /// The beams of tracked scans (in the sensor frame, de-skewed like the tracker's), kept until
 /// the final poses are known so that the map can let them see through what a keyframe caught in
 /// passing; nothing is kept when no map is wanted.
@@ -39,6 +44,11 @@ pub struct SeenThrough<const N: usize> {
     fixed: Box<Scan<N>>,
     /// (index of the scan in the log, its beams).
     scans: Vec<(usize, PreparedScan)>,
+    /// Heap bytes of `scans`' beams, and the most they may hold.
+    bytes: usize,
+    max_bytes: usize,
+    /// Least time between kept scans, s: [`SEEN_THROUGH_INTERVAL_S`], doubled at each thinning.
+    interval_s: f64,
     /// Scans offered so far, and the stamp of the last one kept.
     offered: usize,
     last_kept_s: Option<f64>,
@@ -46,10 +56,17 @@ pub struct SeenThrough<const N: usize> {
 
 impl<const N: usize> SeenThrough<N> {
     pub fn new() -> Self {
+        Self::within(SEEN_THROUGH_MAX_BYTES)
+    }
+
+    fn within(max_bytes: usize) -> Self {
         Self {
             history: MotionHistory::default(),
             fixed: Box::default(),
             scans: Vec::new(),
+            bytes: 0,
+            max_bytes,
+            interval_s: SEEN_THROUGH_INTERVAL_S,
             offered: 0,
             last_kept_s: None,
         }
@@ -67,7 +84,7 @@ impl<const N: usize> SeenThrough<N> {
         self.offered += 1;
         let due = self
             .last_kept_s
-            .is_none_or(|t| (scan.stamp_s - t).abs() >= SEEN_THROUGH_INTERVAL_S);
+            .is_none_or(|t| (scan.stamp_s - t).abs() >= self.interval_s);
         if due {
             let beams = match self.history.rate().filter(|_| deskew_beams) {
                 Some(motion) => {
@@ -78,10 +95,25 @@ impl<const N: usize> SeenThrough<N> {
             };
             // MAP_RANGE_M is finite and positive and no clearing range is given: cannot fail.
             let prepared = PreparedScan::from_beams(beams, MAP_RANGE_M, None).unwrap_or_default();
+            self.bytes += prepared.memory_bytes();
             self.scans.push((index, prepared));
             self.last_kept_s = Some(scan.stamp_s);
+            if self.bytes > self.max_bytes {
+                self.thin();
+            }
         }
         self.history.push(scan.stamp_s, pose);
+    }
+
+    /// Drops every other kept scan and doubles the interval between the next ones.
+    fn thin(&mut self) {
+        let mut k = 0;
+        self.scans.retain(|_| {
+            k += 1;
+            k % 2 == 1
+        });
+        self.bytes = self.scans.iter().map(|(_, s)| s.memory_bytes()).sum();
+        self.interval_s *= 2.0;
     }
 }
 
@@ -209,5 +241,41 @@ impl Staged {
             write_png(out, |p| plot_trajectory(p, &data))?;
         }
         Ok(written)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plumbline_core::scan::Beam;
+
+    fn scan(stamp_s: f64) -> Scan<360> {
+        let mut s = Scan::new(stamp_s);
+        for k in 0..360 {
+            let angle = (k as f32).to_radians();
+            s.push(Beam::new(angle, 2.0)).unwrap();
+        }
+        s
+    }
+
+    #[test]
+    fn kept_scans_stay_within_their_budget_and_span_the_whole_log() {
+        let one = PreparedScan::from_beams(scan(0.0).beams(), MAP_RANGE_M, None)
+            .unwrap()
+            .memory_bytes();
+        let mut seen = SeenThrough::<360>::within(20 * one);
+        for k in 0..2000 {
+            let t = k as f64 * 0.25;
+            seen.add(&scan(t), Pose2::default(), false, false);
+            assert!(
+                seen.bytes <= 20 * one,
+                "{} bytes after scan {k}",
+                seen.bytes
+            );
+        }
+        assert!(seen.scans.len() >= 10, "{} scans kept", seen.scans.len());
+        let last = seen.scans.last().unwrap().0;
+        assert!(last >= 1900, "the last kept scan is {last} of 2000");
+        assert_eq!(seen.scans.first().unwrap().0, 0);
     }
 }
