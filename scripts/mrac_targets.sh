@@ -11,14 +11,17 @@
 #     adaptive weight norm (0 seeds: tracking only).
 # Prints TSV tables; every run is a plain `plumbline sim ... --json` line you can repeat.
 #   bash scripts/mrac_targets.sh [TRACK_SEEDS] [ROBUST_SEEDS] [JOBS] [FIRST_SEED]
+# BIN=PATH measures that binary instead of building this checkout's (e.g. an older release).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 track_seeds=${1:-10}
 robust_seeds=${2:-100}
 jobs=${3:-2}
 first_seed=${4:-1}
-cargo build --release -q -p plumbline
-bin=$PWD/target/release/plumbline
+if [ -z "${BIN:-}" ]; then
+  cargo build --release -q -p plumbline
+fi
+bin=$(realpath "${BIN:-target/release/plumbline}")
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
