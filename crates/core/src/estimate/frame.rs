@@ -19,10 +19,10 @@
 //! turn is taken out, and the Jacobian from that error to the filter's own is
 //! `T(x) = I + N_pv(x) e_yawᵀ + N_c(x) e_cloneyawᵀ`. The update ran with `T(x⁻)`; the
 //! covariance is moved to `T(x⁺)` by `A = T(x⁺) T(x⁻)⁻¹ = I + J Δ_pv e_yawᵀ + J Δ_c e_cloneyawᵀ`,
-//! `P ← A P Aᵀ`. The motion model's Jacobian carries `N(x)` from one estimate to the next
-//! (position and velocity move linearly in it, and its yaw column turns the velocity the
-//! specific force adds, [`super::imu`]), and the match's model at any estimate is blind along
-//! `N` there ([`super::scan_match`]): together, no relative match informs the frame's heading.
+//! `P ← A P Aᵀ`. The motion model's Jacobian already carries `N(x)` from one estimate to the
+//! next (position and velocity move linearly, the yaw column holds what the specific force
+//! added, [`super::imu`]), and the match's model at any estimate is blind along `N` there
+//! ([`super::scan_match`]): together, no relative match informs the frame's heading.
 //! Absolute measurements (a companion's map pose) do, as they should.
 
 use super::ekf::{ix, Ekf, State};
