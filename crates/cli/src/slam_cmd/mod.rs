@@ -135,6 +135,9 @@ pub fn run(args: SlamArgs) -> CliResult {
     let mut previous_odom: Option<OdomPose> = None;
     let mut lost_s = 0.0;
     let mut span_s: Option<(f64, f64)> = None;
+    let mut seen = outputs::SeenThrough::new();
+    let map_wanted = args.map.is_some() || truth.is_some();
+    let mut previous: Option<plumbline_slam::ScanPose> = None;
     while let Some(rec) = reader.next_scan()? {
         *scan = rec.to_scan().map_err(|_| {
             CliError(format!(
@@ -157,6 +160,11 @@ pub fn run(args: SlamArgs) -> CliResult {
             lost_s += (rec.timestamp_s - last).abs();
         }
         span_s = Some((span_s.map_or(rec.timestamp_s, |s| s.0), rec.timestamp_s));
+        if map_wanted {
+            let jumped = previous.is_some_and(|p| slam.map_jumped(&p));
+            seen.add(&scan, out.pose, config.deskew, jumped);
+            previous = Some(out);
+        }
         if let Some(p) = plot_scans.as_mut() {
             p.add(&rec);
         }
@@ -180,10 +188,12 @@ pub fn run(args: SlamArgs) -> CliResult {
         .ok_or_else(|| CliError("the SLAM back end stopped unexpectedly".into()))?;
     let backend = &finished.backend;
     let trajectory = outputs::trajectory(anchors, backend.poses());
-    let written = staged.write(args.map.as_deref(), plot_scans, &trajectory, backend)?;
+    let written = staged.write(args.map.as_deref(), plot_scans, &trajectory, &seen, backend)?;
     let map_error = match (&truth, &written.grid) {
         (Some(truth), Some(grid)) => truth.map_error(grid, first_s)?,
-        (Some(truth), None) => truth.map_error(&outputs::grid(backend)?, first_s)?,
+        (Some(truth), None) => {
+            truth.map_error(&outputs::grid(backend, &trajectory, &seen)?, first_s)?
+        }
         _ => None,
     };
     times_us.sort_by(f64::total_cmp);

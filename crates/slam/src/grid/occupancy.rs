@@ -171,6 +171,37 @@ impl OccupancyGrid {
         Ok(())
     }
 
+    /// Lets the beams of a scan at `pose` clear what a keyframe saw only in passing: every cell
+    /// a beam of `scan` passes through (hits and clears alike, not the cell it ends in) gains a
+    /// miss if it holds between one and `max_hits` hits. A person walking past leaves a hit or two per cell in the one keyframe
+    /// that caught them, and the scans after it see through the spot; a wall gathers hits from
+    /// every keyframe that faces it, so the beams that graze it do not wear it away, and cells
+    /// no keyframe reached stay unknown. Nothing else changes: the grid does not grow and no
+    /// hit is added.
+    pub fn see_through(
+        &mut self,
+        pose: Pose2,
+        scan: &PreparedScan,
+        max_hits: u16,
+    ) -> Result<(), GridError> {
+        if !pose.is_finite() {
+            return Err(GridError::NonFinitePose);
+        }
+        let origin = self.frame.cell_of(pose.translation());
+        let (s, c) = (pose.theta.sin(), pose.theta.cos());
+        for p in scan.hits().iter().chain(scan.clears()) {
+            let w = Vec2::new(c * p.x - s * p.y + pose.x, s * p.x + c * p.y + pose.y);
+            let tiles = &mut self.tiles;
+            super::raycast::trace(origin, self.frame.cell_of(w), |cell| {
+                let hits = tiles.counts(cell).0;
+                if (1..=max_hits).contains(&hits) {
+                    tiles.add_miss(cell);
+                }
+            });
+        }
+        Ok(())
+    }
+
     /// (hits, misses) of a cell.
     pub fn counts(&self, cell: Cell) -> (u16, u16) {
         self.tiles.counts(cell)
