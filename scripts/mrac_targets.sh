@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The adaptive controller's targets, measured on the `track` scenario (hall, UTM-30LX: at 1 m/s
 # the XV-11's keyframe odometry loses the lidar on the square, whoever flies):
-#  1. tracking: PID against MRAC on the square, nominal, mass +30 %, motor 1 at 80 % and both
-#     (calm: no gusts, no people), TRACK_SEEDS seeds each from FIRST_SEED; the true error is
+#  1. tracking: PID against MRAC on the square and the figure of eight, nominal, mass +30 %,
+#     motor 1 at 80 % and both (calm: no gusts, no people), TRACK_SEEDS seeds each from
+#     FIRST_SEED, with MRAC's mean RMS over PID's (the target: <= 0.5 under both errors,
+#     <= 1 nominal); the true error is
 #     split into the estimate's error from the setpoint (what the controller sees and acts on)
 #     and the estimate's error from the truth (what it cannot see);
 #  2. robustness: PID and MRAC over ROBUST_SEEDS seeds for each model error, with
@@ -11,14 +13,17 @@
 #     adaptive weight norm (0 seeds: tracking only).
 # Prints TSV tables; every run is a plain `plumbline sim ... --json` line you can repeat.
 #   bash scripts/mrac_targets.sh [TRACK_SEEDS] [ROBUST_SEEDS] [JOBS] [FIRST_SEED]
+# BIN=PATH measures that binary instead of building this checkout's (e.g. an older release).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 track_seeds=${1:-10}
 robust_seeds=${2:-100}
 jobs=${3:-2}
 first_seed=${4:-1}
-cargo build --release -q -p plumbline
-bin=$PWD/target/release/plumbline
+if [ -z "${BIN:-}" ]; then
+  cargo build --release -q -p plumbline
+fi
+bin=$(realpath "${BIN:-target/release/plumbline}")
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
@@ -44,10 +49,13 @@ plan() {
 }
 
 {
-  plan "$track_seeds" "pid mrac" nominal --no-gusts --no-people
-  plan "$track_seeds" "pid mrac" heavy --no-gusts --no-people --mass-scale 1.3
-  plan "$track_seeds" "pid mrac" weak --no-gusts --no-people --weak-motor 1,0.8
-  plan "$track_seeds" "pid mrac" heavy-weak --no-gusts --no-people --mass-scale 1.3 --weak-motor 1,0.8
+  for shape in square eight; do
+    plan "$track_seeds" "pid mrac" "$shape-nominal" --track "$shape" --no-gusts --no-people
+    plan "$track_seeds" "pid mrac" "$shape-heavy" --track "$shape" --no-gusts --no-people --mass-scale 1.3
+    plan "$track_seeds" "pid mrac" "$shape-weak" --track "$shape" --no-gusts --no-people --weak-motor 1,0.8
+    plan "$track_seeds" "pid mrac" "$shape-heavy-weak" --track "$shape" --no-gusts --no-people \
+      --mass-scale 1.3 --weak-motor 1,0.8
+  done
   plan "$robust_seeds" "pid mrac" mass --mass-scale 1.3
   plan "$robust_seeds" "pid mrac" motor --weak-motor 1,0.8
   plan "$robust_seeds" "pid mrac" mass-motor --mass-scale 1.3 --weak-motor 1,0.8
@@ -71,10 +79,13 @@ def stats(name, controller):
     track = [r["rms_track_error_m"] for r in ok if r["rms_track_error_m"] is not None]
     return rs, ok, track
 
-print("tracking (square, calm)")
-print("error\tcontroller\truns\tflew_track\tmean_rms_track_m\tmedian_rms_track_m\tmean_max_track_m"
-      "\tmean_rms_control_m\tmean_rms_estimate_m")
-for name in ["nominal", "heavy", "weak", "heavy-weak"]:
+print("tracking (calm)")
+print("path-error\tcontroller\truns\tflew_track\tmean_rms_track_m\tmedian_rms_track_m\tmean_max_track_m"
+      "\tmean_rms_control_m\tmean_rms_estimate_m\tmrac_over_pid")
+names = [f"{shape}-{error}" for shape in ["square", "eight"]
+         for error in ["nominal", "heavy", "weak", "heavy-weak"]]
+for name in names:
+    _, _, pid_track = stats(name, "pid")
     for controller in ["pid", "mrac"]:
         rs, ok, track = stats(name, controller)
         maxes = [r["max_track_error_m"] for r in ok if r["max_track_error_m"] is not None]
@@ -85,8 +96,11 @@ for name in ["nominal", "heavy", "weak", "heavy-weak"]:
         for key in ["rms_track_control_error_m", "rms_track_estimate_error_m"]:
             xs = [r[key] for r in ok if r.get(key) is not None]
             parts.append(f"{statistics.mean(xs):.3f}" if xs else "-")
+        ratio = "-"
+        if controller == "mrac" and track and pid_track and len(track) == len(rs):
+            ratio = f"{statistics.mean(track) / statistics.mean(pid_track):.2f}"
         print(f"{name}\t{controller}\t{len(rs)}\t{len(track)}\t{mean}\t{median}\t{mmax}\t"
-              + "\t".join(parts))
+              + "\t".join(parts) + f"\t{ratio}")
 
 if int(sys.argv[2]) == 0:
     sys.exit()

@@ -77,31 +77,36 @@ impl Ekf {
         vel += accel * dt;
         self.x[ix::YAW] = normalize_angle(yaw + yaw_rate * dt);
 
-        self.pending_dt += dt;
-        if self.pending_dt >= self.config.covariance_period_s {
-            let step = self.pending_dt;
-            self.pending_dt = 0.0;
-            self.propagate_covariance(&r, &world_specific, cr / cp, step);
+        let pending = &mut self.pending;
+        for i in 0..2 {
+            pending.position[i] += pending.velocity[i] * dt + accel[i] * (0.5 * dt * dt);
+            pending.velocity[i] += accel[i] * dt;
+        }
+        pending.dt += dt;
+        if pending.dt >= self.config.covariance_period_s {
+            let moved = core::mem::take(&mut self.pending);
+            self.propagate_covariance(&r, &world_specific, cr / cp, &moved);
         }
         Ok(())
     }
 
-    /// `P = F P F^T + Q` over `dt`, with F the motion model's Jacobian. `yaw_gain` is
-    /// d(yaw rate)/d(gyro z) = cos(roll)/cos(pitch).
+    /// `P = F P F^T + Q` over the pending motion, with F the motion model's Jacobian.
+    /// `yaw_gain` is d(yaw rate)/d(gyro z) = cos(roll)/cos(pitch).
     fn propagate_covariance(
         &mut self,
         r: &Matrix3<f32>,
         world_specific: &Vector3<f32>,
         yaw_gain: f32,
-        dt: f32,
+        moved: &PendingMotion,
     ) {
+        let dt = moved.dt;
         // F = I + G with G's 23 entries out of 324, all in the rows of the MOVED states.
         // B = P F^T differs from P only in the moved columns, and F P F^T = F B differs from B
         // only in the moved rows, which by symmetry are B's moved columns except where a moved
         // row meets a moved column. So: the moved columns of B (column operations, over
         // contiguous memory), then the 9 x 9 block where moved meets moved. Dense products
         // would be the largest single cost of the closed loop, row operations on P the next.
-        let g = jacobian_entries(r, world_specific, yaw_gain, dt);
+        let g = jacobian_entries(r, world_specific, yaw_gain, moved);
         // Column k of the column-major matrix.
         let column = |k: usize| k * N..(k + 1) * N;
         let p = self.p.as_slice();
@@ -183,17 +188,28 @@ const SLOT: [usize; N] = {
     slots
 };
 
-/// Number of off-identity entries of the motion model's Jacobian.
-const JACOBIAN_ENTRIES: usize = 23;
+/// The motion since the covariance last caught up with the state: its duration (s), and the
+/// horizontal velocity (m/s) and position (m) the specific force added over it, the position's
+/// beyond what the velocity at its start carried.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct PendingMotion {
+    pub dt: f32,
+    pub velocity: [f32; 2],
+    pub position: [f32; 2],
+}
 
-/// The motion model's Jacobian minus the identity, as (row, column, value), over `dt`.
+/// Number of off-identity entries of the motion model's Jacobian.
+const JACOBIAN_ENTRIES: usize = 25;
+
+/// The motion model's Jacobian minus the identity, as (row, column, value), over the pending
+/// motion; the tilt and bias columns with the latest sample's rotation and specific force.
 fn jacobian_entries(
     r: &Matrix3<f32>,
     world_specific: &Vector3<f32>,
     yaw_gain: f32,
-    dt: f32,
+    moved: &PendingMotion,
 ) -> [(usize, usize, f32); JACOBIAN_ENTRIES] {
-    let u = world_specific;
+    let (u, dt) = (world_specific, moved.dt);
     let mut g = [(0, 0, 0.0); JACOBIAN_ENTRIES];
     let mut k = 0;
     let mut put = |i: usize, j: usize, v: f32| {
@@ -203,9 +219,17 @@ fn jacobian_entries(
     for i in 0..3 {
         put(ix::POS + i, ix::VEL + i, dt);
     }
-    // d(R f)/d(yaw) = (-(R f)_y, (R f)_x, 0).
-    put(ix::VEL, ix::YAW, -u.y * dt);
-    put(ix::VEL + 1, ix::YAW, u.x * dt);
+    // d(R f)/d(yaw) = (-(R f)_y, (R f)_x, 0), integrated over the period from every sample,
+    // not the last one times the period: a turn of the heading turns exactly the velocity and
+    // position the specific force added, so the covariance carries the whole frame's turn from
+    // one estimate to the next (super::frame). With the last sample's force the two parted by
+    // the accelerometer's noise every period, a random walk of what the covariance took for
+    // the frame's turn.
+    let [dv, dp] = [moved.velocity, moved.position];
+    put(ix::VEL, ix::YAW, -dv[1]);
+    put(ix::VEL + 1, ix::YAW, dv[0]);
+    put(ix::POS, ix::YAW, -dp[1]);
+    put(ix::POS + 1, ix::YAW, dp[0]);
     for i in 0..3 {
         for j in 0..3 {
             put(ix::VEL + i, ix::ACCEL_BIAS + j, -r[(i, j)] * dt);
@@ -272,7 +296,12 @@ pub(crate) mod tests {
         let r = rotation_at(0.1, -0.2, 0.7);
         let u = Vector3::new(0.3, -0.4, 9.9);
         let mut dense = Covariance::identity();
-        for (i, j, v) in jacobian_entries(&r, &u, 1.01, 0.01) {
+        let moved = PendingMotion {
+            dt: 0.01,
+            velocity: [0.003, -0.004],
+            position: [2e-5, 1e-5],
+        };
+        for (i, j, v) in jacobian_entries(&r, &u, 1.01, &moved) {
             dense[(i, j)] += v;
         }
         let expected = dense * f.p * dense.transpose();
@@ -284,7 +313,7 @@ pub(crate) mod tests {
             gyro_bias_walk: 0.0,
             ..f.config
         };
-        no_noise.propagate_covariance(&r, &u, 1.01, 0.01);
+        no_noise.propagate_covariance(&r, &u, 1.01, &moved);
         assert!((no_noise.p - expected).abs().max() < 1e-5);
     }
 

@@ -8,6 +8,7 @@ pub mod attitude;
 pub mod drag;
 pub mod ekf;
 pub mod estimator;
+mod frame;
 pub mod imu;
 pub mod pose_fix;
 pub mod scan_match;

@@ -75,9 +75,27 @@ pub struct MracConfig {
     pub reference_z: ReferenceConfig,
     pub pd_xy: PdGains,
     pub pd_z: PdGains,
+    /// Horizontal drag per unit mass the baseline feeds forward on the reference model's
+    /// velocity, 1/s (m/s^2 per m/s): the force the rotors' induced drag takes from a vehicle
+    /// flying at speed, which the inversion's model leaves out. Without it the baseline flies a
+    /// steady leg behind its setpoint until the position error's PD term makes up the drag
+    /// (at 1 m/s and `pd_xy.kp` 6/s^2, 1.7 cm for 0.1/s), and the adaptive element learns it
+    /// only slowly, from that small error.
+    pub drag_feed_forward_per_s: f32,
+    /// Lead on the reference model's horizontal acceleration, s: the baseline adds this times
+    /// the rate of change of the model's acceleration (its jerk), so a tilt the attitude loop
+    /// reaches only after about this long is asked for that much earlier. A change of path
+    /// acceleration otherwise leaves the vehicle behind by the inner loops' lag.
+    pub lead_s: f32,
+    /// Time constant of the low-pass on that jerk, s: a step of the path's acceleration (a
+    /// square's corner) becomes a lead that decays over this time, not a one-step spike.
+    pub lead_filter_s: f32,
     pub adaptive: AdaptiveConfig,
     pub fallback: FallbackConfig,
 }
+
+const LEAD_S: f32 = 0.1;
+const LEAD_FILTER_S: f32 = 0.05;
 
 impl Default for MracConfig {
     /// The baseline matches the PID cascade's default stiffness, so the two differ only by
@@ -107,6 +125,11 @@ impl Default for MracConfig {
                 kp_per_s2: 6.0,
                 kd_per_s: 4.0,
             },
+            // The rotor-drag coefficient the estimator's drag reading assumes
+            // (crate::estimate::drag::DragConfig).
+            drag_feed_forward_per_s: 0.1,
+            lead_s: LEAD_S,
+            lead_filter_s: LEAD_FILTER_S,
             adaptive: AdaptiveConfig {
                 enabled: true,
                 // Chosen on the simulator's square track in the hall (utm30lx, seeds 1-4,
@@ -213,6 +236,9 @@ impl MracConfig {
             positive(names[0], pd.kp_per_s2)?;
             positive(names[1], pd.kd_per_s)?;
         }
+        non_negative("drag_feed_forward_per_s", self.drag_feed_forward_per_s)?;
+        non_negative("lead_s", self.lead_s)?;
+        positive("lead_filter_s", self.lead_filter_s)?;
         let a = &self.adaptive;
         non_negative("adaptive.bias_learning_rate", a.bias_learning_rate)?;
         non_negative("adaptive.learning_rate", a.learning_rate)?;
@@ -240,6 +266,16 @@ mod tests {
         let mut c = MracConfig::default();
         c.pd_z.kd_per_s = 0.0;
         assert_eq!(c.validate().unwrap_err().field, "pd_z.kd_per_s");
+        let c = MracConfig {
+            drag_feed_forward_per_s: -0.1,
+            ..MracConfig::default()
+        };
+        assert_eq!(c.validate().unwrap_err().field, "drag_feed_forward_per_s");
+        let c = MracConfig {
+            lead_filter_s: 0.0,
+            ..MracConfig::default()
+        };
+        assert_eq!(c.validate().unwrap_err().field, "lead_filter_s");
         let mut c = MracConfig::default();
         c.adaptive.rbf_width = f32::NAN;
         assert_eq!(c.validate().unwrap_err().field, "adaptive.rbf_width");

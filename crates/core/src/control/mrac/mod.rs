@@ -11,7 +11,8 @@
 //!    step's `nu_crm - nu_h`, then gives this step's `nu_crm = f_rm(x_rm, r)`;
 //! 3. tracking error `e = x_rm - x` (position and velocity), PD `nu_pd = kp e_p + kd e_v`;
 //! 4. adaptive element ([`rbf`], eq. 11) `nu_ad = W^T sigma(v, nu_crm)`;
-//! 5. `nu = nu_crm + nu_pd - nu_ad` (eq. 9), and eq. 12 trains `W` on `e^T P B`, with
+//! 5. `nu = nu_crm + nu_pd + c_d v_rm - nu_ad` (eq. 9, with the horizontal drag fed forward on
+//!    the model's velocity), and eq. 12 trains `W` on `e^T P B`, with
 //!    e-modification, the weights projected onto a ball;
 //! 6. the watchdog ([`monitor`]) switches the adaptive element off, resetting its weights, when
 //!    it misbehaves; the baseline (reference model, PD, feed-forward) flies on and the reason is
@@ -65,6 +66,8 @@ pub struct Mrac<const C: usize> {
     /// The reference model's own acceleration at the last step (m/s^2): the model moves on
     /// by it, less the hedge, once that step's outcome is known.
     last_model_accel: [f32; 3],
+    /// The model's horizontal jerk, low-passed (m/s^3), for the lead.
+    jerk: [f32; 2],
     /// What the inversion made of the last command (m/s^2, see [`hedge`]).
     deliverable: Option<[f32; 3]>,
     /// Delivered over wanted collective at the last actuation.
@@ -102,6 +105,7 @@ impl<const C: usize> Mrac<C> {
             ],
             last_command: None,
             last_model_accel: [0.0; 3],
+            jerk: [0.0; 2],
             deliverable: None,
             thrust_ratio: 1.0,
             hedge: [0.0; 3],
@@ -134,6 +138,7 @@ impl<const C: usize> Mrac<C> {
         self.started = false;
         self.last_command = None;
         self.last_model_accel = [0.0; 3];
+        self.jerk = [0.0; 2];
         self.deliverable = None;
         self.thrust_ratio = 1.0;
         self.hedge = [0.0; 3];
@@ -299,6 +304,15 @@ impl<const C: usize> Mrac<C> {
                 &self.config.pd_z
             };
             baseline[k] = nu_crm[k] + pd.kp_per_s2 * e[k][0] + pd.kd_per_s * e[k][1];
+            if k < 2 {
+                let c = &self.config;
+                if self.last_command.is_some() {
+                    let raw = (nu_crm[k] - self.last_model_accel[k]) / dt;
+                    self.jerk[k] += (raw - self.jerk[k]) * dt / (c.lead_filter_s + dt);
+                }
+                baseline[k] += c.drag_feed_forward_per_s * self.reference[k].velocity_m_s
+                    + c.lead_s * self.jerk[k];
+            }
         }
         let mut nu: [f32; 3] =
             core::array::from_fn(|k| if on[k] { baseline[k] - nu_ad[k] } else { 0.0 });
