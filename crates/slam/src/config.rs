@@ -90,7 +90,6 @@ impl SlamConfig {
         let mut config = Self::default();
         config.odometry.keyframe_reach_below_conditioning = 0.0;
         config.odometry.keyframe_reach_m = f32::INFINITY;
-        config.guard.rematch_below_fit = 0.0;
         config
     }
 }
@@ -218,14 +217,6 @@ pub struct GuardConfig {
     pub min_found_score: f32,
     /// …and this many times the guess's score (the scores are the fit's own, unpenalised).
     pub min_gain: f32,
-    /// A match whose own fit against the keyframe is below this is tried again from the wide
-    /// search's pose, and the better fitting of the two is taken (0: off, as in flight). The
-    /// guess can fit well enough and the match still settle in a wrong basin: Intel thinned to
-    /// every 8th scan from the 5th, a turn in place matched 0.89 m along a corridor, 1.24 ->
-    /// 0.78 m. A match fits below 0.5 about once in an hour of Intel or MIT thinned to every
-    /// 4th scan (the lowest 1 % of Intel's fits is 0.66) and never at full rate, whose
-    /// trajectories it leaves byte for byte the same.
-    pub rematch_below_fit: f32,
 }
 
 impl Default for GuardConfig {
@@ -244,7 +235,6 @@ impl Default for GuardConfig {
             prior_weight: 0.02,
             min_found_score: 0.35,
             min_gain: 1.5,
-            rematch_below_fit: 0.5,
         }
     }
 }

@@ -53,57 +53,33 @@ impl GuessGuard {
         guess: Pose2,
         gap_s: f32,
     ) -> (Guarded, Option<Pose2>) {
-        let Some(guess_score) = self.fit(keyframe, index, points, guess) else {
-            return (Guarded::GuessKept, None);
-        };
-        if guess_score >= self.config.min_guess_score {
-            return (Guarded::GuessKept, None);
-        }
-        let floor = (guess_score * self.config.min_gain).max(self.config.min_found_score);
-        self.search(keyframe, points, guess, gap_s, floor)
-    }
-
-    /// How well `points` placed at `pose` in the frame of keyframe `index` fit it (mean
-    /// likelihood, 0 to 1); `None` when the guard is off or there are no points.
-    pub fn fit(
-        &mut self,
-        keyframe: &Keyframe,
-        index: usize,
-        points: &[Vec2],
-        pose: Pose2,
-    ) -> Option<f32> {
         let cfg = &self.config;
         if !cfg.enabled || points.is_empty() {
-            return None;
+            return (Guarded::GuessKept, None);
         }
+        // Scored points lie within `max_range_m` of the scan, and the scan within the largest
+        // step plus the window of the keyframe: farther reference points cannot be reached and
+        // would only grow the grid. Nearer ones must all be there, or a scan that moved far
+        // would find its farthest points on empty cells and fit better short of where it is.
+        let reach = cfg.correlative.max_range_m + cfg.max_step_m;
+        let reference =
+            || -> Vec<Vec2> { keyframe.points().filter(|p| p.norm() <= reach).collect() };
         if self.keyframe != Some(index) {
-            let reference = reference_points(keyframe, cfg);
+            let reference = reference();
             self.check = Some(LookupGrid::new(&reference, 0.0, &cfg.correlative, 1));
             self.search = None;
             self.keyframe = Some(index);
         }
-        let check = self.check.as_ref()?;
-        Some(check.score_pose(points, pose, &cfg.correlative))
-    }
-
-    /// A wide search around `guess` (made by repeating the last motion over `gap_s` since the
-    /// last scan that matched) for a pose that fits keyframe at least `floor`; call it after
-    /// [`Self::fit`] for the same keyframe.
-    pub fn search(
-        &mut self,
-        keyframe: &Keyframe,
-        points: &[Vec2],
-        guess: Pose2,
-        gap_s: f32,
-        floor: f32,
-    ) -> (Guarded, Option<Pose2>) {
-        let cfg = &self.config;
-        if self.check.is_none() {
-            return (Guarded::NothingBetter, None);
+        let Some(check) = &self.check else {
+            return (Guarded::GuessKept, None);
+        };
+        let guess_score = check.score_pose(points, guess, &cfg.correlative);
+        if guess_score >= cfg.min_guess_score {
+            return (Guarded::GuessKept, None);
         }
-        let search = self.search.get_or_insert_with(|| {
-            LookupGrid::new(&reference_points(keyframe, cfg), 0.5, &cfg.correlative, 5)
-        });
+        let search = self
+            .search
+            .get_or_insert_with(|| LookupGrid::new(&reference(), 0.5, &cfg.correlative, 5));
         // How far the motion may have strayed from the repeated one over the gap: the search
         // reaches three times that (bounded work), and poses are penalised by how unlikely it is.
         let gap_s = if gap_s.is_finite() {
@@ -128,6 +104,7 @@ impl GuessGuard {
             translation_m: cfg.max_step_m,
             heading_rad: std::f32::consts::PI,
         };
+        let floor = (guess_score * cfg.min_gain).max(cfg.min_found_score);
         // The penalised winner is the answer; its own fit decides whether it is good enough.
         [(window, prior), (widest, MotionPrior::default())]
             .into_iter()
@@ -140,13 +117,4 @@ impl GuessGuard {
                 (Guarded::Searched { score: found.score }, Some(found.pose))
             })
     }
-}
-
-/// The keyframe's points a scan can reach: within `max_range_m` of the scan, and the scan
-/// within the largest step plus the window of the keyframe. Farther points would only grow the
-/// grid; nearer ones must all be there, or a scan that moved far would find its farthest points
-/// on empty cells and fit better short of where it is.
-fn reference_points(keyframe: &Keyframe, cfg: &GuardConfig) -> Vec<Vec2> {
-    let reach = cfg.correlative.max_range_m + cfg.max_step_m;
-    keyframe.points().filter(|p| p.norm() <= reach).collect()
 }

@@ -7,7 +7,7 @@ use crate::deskew::{deskew, is_timed, rate_of, MotionHistory};
 use crate::guard::{Guarded, GuessGuard};
 use crate::keyframe::Keyframe;
 use crate::observed::Observed;
-use plumbline_core::geom::{Pose2, Vec2};
+use plumbline_core::geom::Pose2;
 use plumbline_core::matching::local_map::{LineMap, MapCell, MapUse, MappedOdometry};
 use plumbline_core::matching::OdometryStep;
 use plumbline_core::scan::sweep::SweepMotion;
@@ -119,7 +119,6 @@ impl<'m, const N: usize> Tracker<'m, N> {
     /// Tracks a revolution whose motion has been removed (or needed no removing).
     fn track_deskewed(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> Tracked {
         let (guess, prior) = self.guarded_prior(scan, prior);
-        let prior = self.second_look(scan, prior);
         // The match is made in the axes of the keyframe it is made against.
         let reference_heading = self.keyframe.as_ref().map(|k| k.tracking_pose.theta);
         let step = self.odometry.update(scan, prior);
@@ -163,50 +162,22 @@ impl<'m, const N: usize> Tracker<'m, N> {
         self.keyframe.as_ref().map(|k| (self.keyframes - 1, k))
     }
 
-    /// The prior to match from: `prior`, unless the match it leads to fits the keyframe poorly
-    /// ([`crate::config::GuardConfig::rematch_below_fit`]) and a match from the wide search's
-    /// pose fits better. A poor fit after the match, not before it, is what tells a wrong
-    /// basin: the guess can fit well enough for the guard and the matcher still slide from it.
-    fn second_look(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> Option<Pose2> {
-        let threshold = self.config.guard.rematch_below_fit;
-        let Some(keyframe) = self.keyframe.as_ref().filter(|_| threshold > 0.0) else {
-            return prior;
-        };
-        let points = valid_points(scan);
-        let index = self.keyframes - 1;
-        let fit_from = |odometry: &mut MappedOdometry<'m, N>, guard: &mut GuessGuard, prior| {
-            let matched = odometry.preview(scan, prior).ok()?;
-            guard.fit(keyframe, index, &points, matched.motion)
-        };
-        let Some(fit) = fit_from(&mut self.odometry, &mut self.guard, prior) else {
-            return prior;
-        };
-        if fit >= threshold {
-            return prior;
-        }
-        let guess = self.guess(keyframe, prior);
-        let gap_s = (scan.stamp_s - self.last_matched_s) as f32;
-        let (_, Some(found)) = self.guard.search(keyframe, &points, guess, gap_s, fit) else {
-            return prior;
-        };
-        let other = Some(
-            self.last_pose
-                .between(keyframe.tracking_pose.compose(found)),
-        );
-        match fit_from(&mut self.odometry, &mut self.guard, other) {
-            Some(other_fit) if other_fit > fit => other,
-            _ => prior,
-        }
-    }
-
     /// The motion prior for the tracker: the caller's, unless the guess it leads to fits the
     /// keyframe badly and a wide search finds a better one.
     fn guarded_prior(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> (Guarded, Option<Pose2>) {
         let Some(keyframe) = &self.keyframe else {
             return (Guarded::GuessKept, prior);
         };
-        let guess = self.guess(keyframe, prior);
-        let points = valid_points(scan);
+        let motion = prior.filter(|p| p.is_finite()).unwrap_or(self.last_motion);
+        let guess = keyframe
+            .tracking_pose
+            .between(self.last_pose.compose(motion));
+        let points: Vec<_> = scan
+            .beams()
+            .iter()
+            .filter(|b| b.valid)
+            .map(|b| b.point())
+            .collect();
         let gap_s = (scan.stamp_s - self.last_matched_s) as f32;
         match self
             .guard
@@ -222,21 +193,4 @@ impl<'m, const N: usize> Tracker<'m, N> {
             (checked, _) => (checked, prior),
         }
     }
-
-    /// Where `prior` (or the last motion repeated) puts the scan in `keyframe`'s frame.
-    fn guess(&self, keyframe: &Keyframe, prior: Option<Pose2>) -> Pose2 {
-        let motion = prior.filter(|p| p.is_finite()).unwrap_or(self.last_motion);
-        keyframe
-            .tracking_pose
-            .between(self.last_pose.compose(motion))
-    }
-}
-
-/// The scan's hit points in its own frame.
-fn valid_points<const N: usize>(scan: &Scan<N>) -> Vec<Vec2> {
-    scan.beams()
-        .iter()
-        .filter(|b| b.valid)
-        .map(|b| b.point())
-        .collect()
 }

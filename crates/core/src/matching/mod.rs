@@ -103,16 +103,6 @@ impl<const N: usize> ScanMatcher<N> {
         self.has_reference = true;
     }
 
-    /// [`Self::match_scan`] as a trial: the next match is made as if this one had not been
-    /// tried (the previous match's translation, which gates the next one, is kept), so a caller
-    /// can compare matches from several guesses before taking one.
-    pub fn try_match(&mut self, scan: &Scan<N>, guess: Pose2) -> Result<MatchResult, MatchError> {
-        let previous = self.previous_translation;
-        let result = self.match_scan(scan, guess);
-        self.previous_translation = previous;
-        result
-    }
-
     /// Where `scan` was taken, in the reference scan's frame, starting from `guess`.
     pub fn match_scan(&mut self, scan: &Scan<N>, guess: Pose2) -> Result<MatchResult, MatchError> {
         if !guess.is_finite() {

@@ -222,7 +222,8 @@ impl<const N: usize> LidarOdometry<N> {
                 },
             };
         }
-        let predicted = self.predicted(prior);
+        let predicted_motion = prior.filter(|p| p.is_finite()).unwrap_or(self.last_motion);
+        let predicted = self.pose.compose(predicted_motion);
         let guess = self.keyframe_pose.between(predicted);
         let dt_s = (scan.stamp_s - self.last_matched_s) as f32;
         let matched = self.matcher.match_scan(scan, guess).and_then(|result| {
@@ -284,24 +285,6 @@ impl<const N: usize> LidarOdometry<N> {
                 OdometryStep::Predicted { error, restarted }
             }
         }
-    }
-
-    /// The match the next update would make of `scan` against the keyframe (before any
-    /// [`MotionLimits`] check), leaving the estimate as it is: a caller can judge the match, or
-    /// try it from another prior, before taking one.
-    pub fn preview(
-        &mut self,
-        scan: &Scan<N>,
-        prior: Option<Pose2>,
-    ) -> Result<MatchResult, MatchError> {
-        let guess = self.keyframe_pose.between(self.predicted(prior));
-        self.matcher.try_match(scan, guess)
-    }
-
-    /// The pose predicted for the next scan: `prior` when finite, else the last motion repeated.
-    fn predicted(&self, prior: Option<Pose2>) -> Pose2 {
-        let motion = prior.filter(|p| p.is_finite()).unwrap_or(self.last_motion);
-        self.pose.compose(motion)
     }
 
     /// The configured decay, kept in [0, 1) so that a bad value cannot make the prediction grow.
@@ -444,30 +427,6 @@ mod tests {
                 "{:?}",
                 odometry.pose()
             );
-        }
-    }
-
-    #[test]
-    fn a_preview_changes_nothing_the_updates_after_it_do() {
-        let config = OdometryConfig::default();
-        let mut plain = LidarOdometry::<360>::new(config);
-        let mut previewed = LidarOdometry::<360>::new(config);
-        for k in 0..6 {
-            let scan = room_at(0.08 * k as f32, 0.02 * k as f32);
-            // A preview from a prior far off, then one from the prior the update will use.
-            let far = previewed.preview(&scan, Some(Pose2::new(0.5, -0.2, 0.3)));
-            let same = previewed.preview(&scan, None);
-            let expected = plain.update(&scan, None);
-            let step = previewed.update(&scan, None);
-            assert_eq!(step, expected, "scan {k}");
-            assert_eq!(previewed.pose(), plain.pose(), "scan {k}");
-            if k == 0 {
-                assert_eq!(far, Err(MatchError::NoReference));
-            } else if let OdometryStep::Matched { result, .. } = step {
-                assert_eq!(same, Ok(result), "scan {k}: the preview is the match taken");
-            } else {
-                panic!("scan {k}: the box should match: {step:?}");
-            }
         }
     }
 

@@ -8,7 +8,7 @@ use super::refine::{
 use super::relocalize::{relocalize, Declined, RelocalizeConfig};
 use crate::geom::Pose2;
 use crate::matching::linalg::Sym3;
-use crate::matching::{LidarOdometry, MatchError, MatchResult, OdometryConfig, OdometryStep};
+use crate::matching::{LidarOdometry, MatchResult, OdometryConfig, OdometryStep};
 use crate::scan::Scan;
 
 /// What the map did with one scan.
@@ -63,16 +63,6 @@ impl<'m, const N: usize> MappedOdometry<'m, N> {
 
     pub fn pose(&self) -> Pose2 {
         self.odometry.pose()
-    }
-
-    /// [`LidarOdometry::preview`]: the match the next update would make of `scan`, before the
-    /// map aligns it; nothing is changed.
-    pub fn preview(
-        &mut self,
-        scan: &Scan<N>,
-        prior: Option<Pose2>,
-    ) -> Result<MatchResult, MatchError> {
-        self.odometry.preview(scan, prior)
     }
 
     pub fn map(&self) -> &LineMap<'m> {
