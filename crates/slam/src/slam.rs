@@ -99,6 +99,12 @@ impl<'m, const N: usize> Slam<'m, N> {
         })
     }
 
+    /// The last revolution given to [`Self::add_scan`] (`raw`) as the tracker matched it, with
+    /// the motion during it removed when it was.
+    pub fn matched_scan<'a>(&'a self, raw: &'a Scan<N>) -> &'a Scan<N> {
+        self.tracker.matched(raw)
+    }
+
     pub fn tracking_stats(&self) -> TrackingStats {
         self.stats
     }

@@ -56,8 +56,10 @@ pub struct Tracker<'m, const N: usize> {
     /// The last scans' poses: the rate a revolution is de-skewed with.
     history: MotionHistory,
     /// The current scan with the motion during its revolution removed (when its beams carry
-    /// their times): what is matched and kept in keyframes.
+    /// their times): what is matched and kept in keyframes. `last_deskewed`: the last scan
+    /// tracked is the one in it.
     deskewed: Option<Box<Scan<N>>>,
+    last_deskewed: bool,
 }
 
 impl<'m, const N: usize> Tracker<'m, N> {
@@ -81,6 +83,7 @@ impl<'m, const N: usize> Tracker<'m, N> {
             last_matched_s: f64::NAN,
             history: MotionHistory::default(),
             deskewed: None,
+            last_deskewed: false,
         })
     }
 
@@ -88,7 +91,9 @@ impl<'m, const N: usize> Tracker<'m, N> {
     /// source (wheel odometry), if any.
     pub fn track(&mut self, scan: &Scan<N>, prior: Option<Pose2>) -> Tracked {
         let mut deskewed = self.deskewed.take().unwrap_or_default();
-        let tracked = match self.sweep_motion(scan, prior) {
+        let motion = self.sweep_motion(scan, prior);
+        self.last_deskewed = motion.is_some();
+        let tracked = match motion {
             Some(motion) => {
                 deskew(scan, motion, &mut deskewed);
                 self.track_deskewed(&deskewed, prior)
@@ -98,6 +103,15 @@ impl<'m, const N: usize> Tracker<'m, N> {
         self.deskewed = Some(deskewed);
         self.history.push(scan.stamp_s, tracked.pose);
         tracked
+    }
+
+    /// The last revolution as it was matched: `raw` (that revolution as given) with the motion
+    /// during it removed when the tracker removed it.
+    pub fn matched<'a>(&'a self, raw: &'a Scan<N>) -> &'a Scan<N> {
+        match &self.deskewed {
+            Some(deskewed) if self.last_deskewed => deskewed,
+            _ => raw,
+        }
     }
 
     /// How the vehicle moves during `scan`'s revolution: at the caller's prior's rate, or the

@@ -137,7 +137,6 @@ pub fn run(args: SlamArgs) -> CliResult {
     let mut span_s: Option<(f64, f64)> = None;
     let mut seen = outputs::SeenThrough::new();
     let map_wanted = args.map.is_some() || truth.is_some();
-    let mut previous: Option<plumbline_slam::ScanPose> = None;
     while let Some(rec) = reader.next_scan()? {
         *scan = rec.to_scan().map_err(|_| {
             CliError(format!(
@@ -161,9 +160,7 @@ pub fn run(args: SlamArgs) -> CliResult {
         }
         span_s = Some((span_s.map_or(rec.timestamp_s, |s| s.0), rec.timestamp_s));
         if map_wanted {
-            let jumped = previous.is_some_and(|p| slam.map_jumped(&p));
-            seen.add(&scan, out.pose, config.deskew, jumped);
-            previous = Some(out);
+            seen.add(slam.matched_scan(&scan));
         }
         if let Some(p) = plot_scans.as_mut() {
             p.add(&rec);

@@ -8,7 +8,6 @@ use plumbline_io::carmen::OdomPose;
 use plumbline_io::output::OutputFile;
 use plumbline_io::trajectory::{write_trajectory, TrajectoryPoint};
 use plumbline_slam::backend::Backend;
-use plumbline_slam::deskew::{deskew, MotionHistory};
 use plumbline_slam::graph::write_g2o;
 use plumbline_slam::grid::{GridConfig, OccupancyGrid, PreparedScan, Raster};
 use plumbline_slam::map_files::write_map;
@@ -36,12 +35,10 @@ const SEEN_THROUGH_INTERVAL_S: f64 = 0.2;
 /// stays bounded however long the log; a passer-by is then cleared by fewer scans.
 const SEEN_THROUGH_MAX_BYTES: usize = 64 << 20;
 
-/// The beams of tracked scans (in the sensor frame, de-skewed like the tracker's), kept until
+/// The beams of tracked scans (in the sensor frame, as the tracker matched them), kept until
 /// the final poses are known so that the map can let them see through what a keyframe caught in
 /// passing; nothing is kept when no map is wanted.
 pub struct SeenThrough<const N: usize> {
-    history: MotionHistory,
-    fixed: Box<Scan<N>>,
     /// (index of the scan in the log, its beams).
     scans: Vec<(usize, PreparedScan)>,
     /// Heap bytes of `scans`' beams, and the most they may hold.
@@ -61,8 +58,6 @@ impl<const N: usize> SeenThrough<N> {
 
     fn within(max_bytes: usize) -> Self {
         Self {
-            history: MotionHistory::default(),
-            fixed: Box::default(),
             scans: Vec::new(),
             bytes: 0,
             max_bytes,
@@ -72,27 +67,16 @@ impl<const N: usize> SeenThrough<N> {
         }
     }
 
-    /// Keeps `scan`'s beams, de-skewed at the rate of the recent poses when `deskew_beams` (the
-    /// tracker's own rule without a motion prior), and notes `pose` (the scan's map-frame pose
-    /// as known now) for the next one. `map_jumped`: a loop closure moved the map since the
-    /// last scan, so the poses before it would give a false rate and are forgotten.
-    pub fn add(&mut self, scan: &Scan<N>, pose: Pose2, deskew_beams: bool, map_jumped: bool) {
-        if map_jumped {
-            self.history = MotionHistory::default();
-        }
+    /// Keeps the beams of `scan` (as the tracker matched it) when the last kept scan is at least
+    /// the interval between kept scans before it.
+    pub fn add(&mut self, scan: &Scan<N>) {
         let index = self.offered;
         self.offered += 1;
         let due = self
             .last_kept_s
             .is_none_or(|t| (scan.stamp_s - t).abs() >= self.interval_s);
         if due {
-            let beams = match self.history.rate().filter(|_| deskew_beams) {
-                Some(motion) => {
-                    deskew(scan, motion, &mut self.fixed);
-                    self.fixed.beams()
-                }
-                None => scan.beams(),
-            };
+            let beams = scan.beams();
             // MAP_RANGE_M is finite and positive and no clearing range is given: cannot fail.
             let prepared = PreparedScan::from_beams(beams, MAP_RANGE_M, None).unwrap_or_default();
             self.bytes += prepared.memory_bytes();
@@ -102,7 +86,6 @@ impl<const N: usize> SeenThrough<N> {
                 self.thin();
             }
         }
-        self.history.push(scan.stamp_s, pose);
     }
 
     /// Drops every other kept scan and doubles the interval between the next ones.
@@ -266,7 +249,7 @@ mod tests {
         let mut seen = SeenThrough::<360>::within(20 * one);
         for k in 0..2000 {
             let t = k as f64 * 0.25;
-            seen.add(&scan(t), Pose2::default(), false, false);
+            seen.add(&scan(t));
             assert!(
                 seen.bytes <= 20 * one,
                 "{} bytes after scan {k}",
