@@ -18,6 +18,7 @@ mod metrics;
 mod nearest;
 mod odometry;
 mod prepared;
+mod prior_fusion;
 mod recovery;
 mod result;
 mod window;
@@ -26,6 +27,7 @@ pub use config::{MatchConfig, MatcherKind};
 pub use icl_paper::{closest_point_on_line, PaperMatch, PaperRejection};
 pub use odometry::{LidarOdometry, MotionLimits, OdometryConfig, OdometryStep};
 pub use prepared::PreparedScan;
+pub use prior_fusion::PriorFusion;
 pub use result::{MatchError, MatchQuality, MatchResult, MatchStatus, UNOBSERVED_VARIANCE};
 
 use crate::geom::{Pose2, Vec2};

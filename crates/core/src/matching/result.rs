@@ -1,5 +1,6 @@
 //! What a match returns: the motion, its covariance and a quality report — or why it failed.
 
+use super::linalg::Sym3;
 use super::prepared::PrepareError;
 use crate::geom::{Pose2, Vec2};
 
@@ -116,5 +117,29 @@ impl core::fmt::Display for MatchError {
                 "match {shift_m:.3} m and {turn_rad:.3} rad from the prediction, beyond what the motion allows"
             ),
         }
+    }
+}
+
+impl MatchResult {
+    /// The inverse of [`Self::observed_covariance`]: what the match measured, with nothing
+    /// along a degenerate direction. There it is assembled from the variance across the
+    /// direction and the heading's (the degenerate covariance has no correlation between
+    /// them), since that covariance is singular by construction. `None` when the covariance is
+    /// not positive definite.
+    pub(crate) fn observed_information(&self) -> Option<Sym3> {
+        let o = &self.observed_covariance;
+        let Some(d) = self.quality.degenerate_direction else {
+            return Sym3::from_array(*o).inverse();
+        };
+        let n = d.perp();
+        let var_across = n.x * n.x * o[0][0] + 2.0 * n.x * n.y * o[0][1] + n.y * n.y * o[1][1];
+        let var_heading = o[2][2];
+        (var_across > 0.0 && var_heading > 0.0).then(|| Sym3 {
+            xx: n.x * n.x / var_across,
+            xy: n.x * n.y / var_across,
+            yy: n.y * n.y / var_across,
+            tt: 1.0 / var_heading,
+            ..Sym3::default()
+        })
     }
 }
