@@ -238,7 +238,6 @@ pub fn run(args: SlamArgs) -> CliResult {
     Ok(())
 }
 
-/// Gives beam k of `scan` the time `k * beam_dt_s` after the first (a log does not store it).
 /// The fusion of `--odom-noise FLOOR_M,PER_M,FLOOR_RAD,PER_RAD`: floors above zero (a prior
 /// that claims to be exact cannot be combined), shares at least zero, all finite.
 fn odometry_noise(text: &str) -> Result<PriorFusion, CliError> {
@@ -269,6 +268,7 @@ fn odometry_noise(text: &str) -> Result<PriorFusion, CliError> {
     Ok(PriorFusion::new(floor_m, per_m, floor_rad, per_rad))
 }
 
+/// Gives beam k of `scan` the time `k * beam_dt_s` after the first (a log does not store it).
 fn time_beams(scan: &mut Scan<MAX_BEAMS>, beam_dt_s: f32) {
     let untimed = scan.clone();
     scan.clear(untimed.stamp_s);
