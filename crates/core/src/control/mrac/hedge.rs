@@ -18,13 +18,25 @@ use crate::msgs::GRAVITY_M_S2;
 /// The hedge (m/s^2 per world axis) of `commanded_m_s2`, given what the inversion made of it
 /// (`deliverable_m_s2`: the model's acceleration for the commanded tilt and lift) and the share
 /// of the wanted thrust the motors delivered (`thrust_ratio`, 1 when nothing saturated).
-pub fn hedge(commanded_m_s2: [f32; 3], deliverable_m_s2: [f32; 3], thrust_ratio: f32) -> [f32; 3] {
+/// `lift_scale` is the factor the horizontal command was given for the thrust-scale error
+/// ([`super::lift`]): the horizontal hedge is divided by it, so that it is in the reference
+/// model's units (what the vehicle was expected to fly), not the inversion's.
+pub fn hedge(
+    commanded_m_s2: [f32; 3],
+    deliverable_m_s2: [f32; 3],
+    thrust_ratio: f32,
+    lift_scale: f32,
+) -> [f32; 3] {
     // Specific force scales with thrust; gravity does not.
     let mut delivered = deliverable_m_s2;
     delivered[2] += GRAVITY_M_S2;
     core::array::from_fn(|k| {
-        let g = if k == 2 { GRAVITY_M_S2 } else { 0.0 };
-        commanded_m_s2[k] - (thrust_ratio * delivered[k] - g)
+        let (g, scale) = if k == 2 {
+            (GRAVITY_M_S2, 1.0)
+        } else {
+            (0.0, lift_scale)
+        };
+        (commanded_m_s2[k] - (thrust_ratio * delivered[k] - g)) / scale
     })
 }
 
@@ -34,16 +46,16 @@ mod tests {
 
     #[test]
     fn only_what_was_not_delivered_is_hedged() {
-        let h = hedge([1.0, -0.5, 0.3], [1.0, -0.5, 0.3], 1.0);
+        let h = hedge([1.0, -0.5, 0.3], [1.0, -0.5, 0.3], 1.0, 1.0);
         assert!(h.iter().all(|x| x.abs() < 1e-6), "{h:?}");
         // The tilt limit cut 5 m/s^2 forward to 3.6.
-        let h = hedge([5.0, 0.0, 0.0], [3.6, 0.0, 0.0], 1.0);
+        let h = hedge([5.0, 0.0, 0.0], [3.6, 0.0, 0.0], 1.0, 1.0);
         assert!(
             (h[0] - 1.4).abs() < 1e-6 && h[1] == 0.0 && h[2] == 0.0,
             "{h:?}"
         );
         // The motors gave 90 % of the thrust for hover: a tenth of g short vertically.
-        let h = hedge([0.0; 3], [0.0; 3], 0.9);
+        let h = hedge([0.0; 3], [0.0; 3], 0.9, 1.0);
         assert!((h[2] - 0.1 * GRAVITY_M_S2).abs() < 1e-5, "{h:?}");
     }
 }

@@ -16,13 +16,16 @@
 //!    e-modification, the weights projected onto a ball;
 //! 6. the watchdog ([`monitor`]) switches the adaptive element off, resetting its weights, when
 //!    it misbehaves; the baseline (reference model, PD, feed-forward) flies on and the reason is
-//!    reported once, for the autopilot's event log.
+//!    reported once, for the autopilot's event log;
+//! 7. the horizontal `nu` is scaled by the lift the vertical channel had to add ([`lift`]): a
+//!    thrust-scale error learned vertically is then no error horizontally either.
 //!
 //! State is a few hundred bytes plus 36 bytes per RBF centre `C` (weights and centre), with no
 //! heap; `C` is a const generic so an embedded build sizes it with `core::mem::size_of`.
 
 pub mod config;
 pub mod hedge;
+pub mod lift;
 pub mod monitor;
 pub mod rbf;
 pub mod reference;
@@ -63,6 +66,8 @@ pub struct Mrac<const C: usize> {
     pb: [[f32; 2]; 3],
     /// The last pseudo-control commanded (m/s^2), for the hedge; `None` after a reset.
     last_command: Option<[f32; 3]>,
+    /// The factor [`lift`] put on its horizontal part.
+    last_lift_scale: f32,
     /// The reference model's own acceleration at the last step (m/s^2): the model moves on
     /// by it, less the hedge, once that step's outcome is known.
     last_model_accel: [f32; 3],
@@ -104,6 +109,7 @@ impl<const C: usize> Mrac<C> {
                 lyapunov_pb(&config.pd_z),
             ],
             last_command: None,
+            last_lift_scale: 1.0,
             last_model_accel: [0.0; 3],
             jerk: [0.0; 2],
             deliverable: None,
@@ -137,6 +143,7 @@ impl<const C: usize> Mrac<C> {
     pub fn reset(&mut self) {
         self.started = false;
         self.last_command = None;
+        self.last_lift_scale = 1.0;
         self.last_model_accel = [0.0; 3];
         self.jerk = [0.0; 2];
         self.deliverable = None;
@@ -202,7 +209,8 @@ impl<const C: usize> Mrac<C> {
     }
 
     /// One outer step: commands per world axis and the estimate in, the pseudo-control (world
-    /// acceleration, m/s^2, z up, gravity not included) out. `adapt` false freezes the weights (on the ground, where the
+    /// acceleration, m/s^2, z up, gravity not included; horizontally in the inversion's units,
+    /// see [`lift`]) out. `adapt` false freezes the weights (on the ground, where the
     /// ground and not the controller holds the vehicle).
     pub fn step(
         &mut self,
@@ -246,7 +254,7 @@ impl<const C: usize> Mrac<C> {
 
         // 1. Hedge: what the last command did not deliver.
         self.hedge = match (self.last_command, self.deliverable) {
-            (Some(nu), Some(d)) => hedge::hedge(nu, d, self.thrust_ratio),
+            (Some(nu), Some(d)) => hedge::hedge(nu, d, self.thrust_ratio, self.last_lift_scale),
             _ => [0.0; 3],
         };
 
@@ -345,8 +353,18 @@ impl<const C: usize> Mrac<C> {
             nu = baseline;
         }
 
+        // 7. The vertical channel's thrust-scale error on the horizontal demands.
+        let scale = if on[2] {
+            lift::horizontal_scale(baseline[2], nu[2])
+        } else {
+            1.0
+        };
+        nu[0] *= scale;
+        nu[1] *= scale;
+
         self.last_model_accel = nu_crm;
         self.last_command = Some(nu);
+        self.last_lift_scale = scale;
         Ok(nu)
     }
 
