@@ -340,9 +340,8 @@ fn scans_that_see_through_a_passer_by_clear_it_and_leave_the_wall() {
     );
     assert_eq!(wall_cells(&g), 17);
     let bounds = g.bounds();
-    for (pose, scan) in &later {
-        g.see_through(*pose, scan, 2).unwrap();
-    }
+    g.see_through(later.iter().map(|(pose, scan)| (*pose, scan)), 2)
+        .unwrap();
     assert_eq!(leg_cells(&g), vec![], "seen through, the leg is gone");
     assert_ne!(g.state_at(leg), CellState::Occupied);
     assert_eq!(wall_cells(&g), 17, "the wall behind it stays");
@@ -351,13 +350,12 @@ fn scans_that_see_through_a_passer_by_clear_it_and_leave_the_wall() {
     // An object three keyframes caught is not something passing by: it stays.
     let mut g = build(3);
     let before = leg_cells(&g);
-    for (pose, scan) in &later {
-        g.see_through(*pose, scan, 2).unwrap();
-    }
+    g.see_through(later.iter().map(|(pose, scan)| (*pose, scan)), 2)
+        .unwrap();
     assert!(!before.is_empty());
     assert_eq!(leg_cells(&g), before);
     assert_eq!(
-        g.see_through(Pose2::new(f32::NAN, 0.0, 0.0), &later[0].1, 2),
+        g.see_through([(Pose2::new(f32::NAN, 0.0, 0.0), &later[0].1)], 2),
         Err(GridError::NonFinitePose)
     );
 }

@@ -145,21 +145,26 @@ pub fn grid<const N: usize>(
 ) -> Result<OccupancyGrid, CliError> {
     let mut grid =
         OccupancyGrid::new(GridConfig::default()).map_err(|e| CliError(format!("map: {e:?}")))?;
-    for (keyframe, &pose) in backend.keyframes().iter().zip(backend.poses()) {
-        if keyframe.has_scan() {
-            grid.insert_scan(pose, &keyframe.beams, MAP_RANGE_M)
-                .map_err(|e| CliError(format!("map: {e:?}")))?;
-        }
-    }
-    for (index, scan) in &seen.scans {
-        let Some(point) = trajectory.get(*index) else {
-            continue;
-        };
-        if !point.lost {
-            grid.see_through(point.pose.to_f32(), scan, TRANSIENT_MAX_HITS)
-                .map_err(|e| CliError(format!("map: {e:?}")))?;
-        }
-    }
+    let keyframes: Vec<(Pose2, PreparedScan)> = backend
+        .keyframes()
+        .iter()
+        .zip(backend.poses())
+        .filter(|(keyframe, _)| keyframe.has_scan())
+        .map(|(keyframe, &pose)| {
+            // MAP_RANGE_M is finite and positive and no clearing range is given: cannot fail.
+            let scan = PreparedScan::from_beams(&keyframe.beams, MAP_RANGE_M, None);
+            (pose, scan.unwrap_or_default())
+        })
+        .collect();
+    grid.rebuild(keyframes.iter().map(|(pose, scan)| (*pose, scan)))
+        .map_err(|e| CliError(format!("map: {e:?}")))?;
+    // Scans whose pose is a prediction (the match failed) could clear real walls.
+    let measured = seen.scans.iter().filter_map(|(index, scan)| {
+        let point = trajectory.get(*index).filter(|p| !p.lost)?;
+        Some((point.pose.to_f32(), scan))
+    });
+    grid.see_through(measured, TRANSIENT_MAX_HITS)
+        .map_err(|e| CliError(format!("map: {e:?}")))?;
     Ok(grid)
 }
 

@@ -17,6 +17,7 @@ mod occupancy;
 mod prepared;
 mod raster;
 mod raycast;
+mod see_through;
 mod tiles;
 
 pub use frame::{Cell, CellRect, GridFrame};

@@ -2,10 +2,16 @@
 
 use super::frame::{Cell, CellRect, GridFrame};
 use super::prepared::PreparedScan;
+use super::see_through::Candidates;
 use super::tiles::{cell_at, Tiles, TILE};
 use super::{CellState, GridConfig, GridError};
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::scan::Beam;
+
+/// Most threads a map operation uses.
+const MAX_THREADS: usize = 4;
+/// Fewest scans worth a thread of their own.
+const MIN_ITEMS_PER_THREAD: usize = 64;
 
 /// An occupancy grid over the map frame (see the module documentation for the model).
 #[derive(Clone)]
@@ -156,12 +162,18 @@ impl OccupancyGrid {
     }
 
     /// Clears the grid and inserts every keyframe at its (new) pose. On an error the grid
-    /// holds the keyframes before the one named.
+    /// holds the keyframes before the one named. A long list is inserted in halves on two
+    /// threads when the result is sure to be the same (see [`Self::rebuilt_in_halves`]).
     pub fn rebuild<'a>(
         &mut self,
         keyframes: impl IntoIterator<Item = (Pose2, &'a PreparedScan)>,
     ) -> Result<(), GridError> {
+        let keyframes: Vec<(Pose2, &PreparedScan)> = keyframes.into_iter().collect();
         self.clear();
+        if let Some(grid) = self.rebuilt_in_halves(&keyframes) {
+            *self = grid;
+            return Ok(());
+        }
         for (index, (pose, scan)) in keyframes.into_iter().enumerate() {
             self.insert(pose, scan).map_err(|e| GridError::InKeyframe {
                 index,
@@ -171,34 +183,77 @@ impl OccupancyGrid {
         Ok(())
     }
 
-    /// Lets the beams of a scan at `pose` clear what a keyframe saw only in passing: every cell
-    /// a beam of `scan` passes through (hits and clears alike, not the cell it ends in) gains a
-    /// miss if it holds between one and `max_hits` hits. A person walking past leaves a hit or two per cell in the one keyframe
-    /// that caught them, and the scans after it see through the spot; a wall gathers hits from
-    /// every keyframe that faces it, so the beams that graze it do not wear it away, and cells
-    /// no keyframe reached stay unknown. Nothing else changes: the grid does not grow and no
-    /// hit is added.
-    pub fn see_through(
+    /// The (cleared) grid with the first half of the keyframes inserted on this thread and the
+    /// second on another, the counts then added. `None`, to insert them one by one instead,
+    /// unless that is sure to give the same grid: both halves went in whole, no count
+    /// saturated in either or in the sum (counts are then order-free), and the merged map is
+    /// within the extent and holds no more tiles than the budget (so no keyframe would have
+    /// been refused). Also `None` on one core or for a short list.
+    fn rebuilt_in_halves(&self, keyframes: &[(Pose2, &PreparedScan)]) -> Option<OccupancyGrid> {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        if cores < 2 || keyframes.len() < 2 * MIN_ITEMS_PER_THREAD {
+            return None;
+        }
+        let (first, second) = keyframes.split_at(keyframes.len() / 2);
+        let insert_all = |part: &[(Pose2, &PreparedScan)]| {
+            let mut grid = self.clone();
+            for &(pose, scan) in part {
+                grid.insert(pose, scan).ok()?;
+            }
+            Some(grid)
+        };
+        let (a, b) = std::thread::scope(|s| {
+            let other = s.spawn(|| insert_all(second));
+            let a = insert_all(first);
+            (a, other.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+        });
+        let (mut grid, b) = (a?, b?);
+        let rect = grid.bounds?.union(b.bounds?);
+        let r = self.config.resolution_m;
+        let span_m = (rect.width().max(rect.height()) as f32) * r;
+        let max_tiles = self.config.max_cells.div_ceil(TILE * TILE);
+        if span_m > self.config.max_extent_m || Tiles::tiles_in(rect) > max_tiles {
+            return None;
+        }
+        grid.tiles.cover(rect);
+        grid.tiles.add(&b.tiles).then_some(())?;
+        grid.bounds = Some(rect);
+        grid.scans += b.scans;
+        Some(grid)
+    }
+
+    /// Lets the beams of scans at their poses clear what a keyframe saw only in passing: every
+    /// cell a beam passes through (hits and clears alike, not the cell it ends in) gains a miss
+    /// if it holds between one and `max_hits` hits. A person walking past leaves a hit or two
+    /// per cell in the one keyframe that caught them, and the scans after it see through the
+    /// spot; a wall gathers hits from every keyframe that faces it, so the beams that graze it
+    /// do not wear it away, and cells no keyframe reached stay unknown. Nothing else changes:
+    /// the grid does not grow and no hit is added. A scan with a non-finite pose refuses the
+    /// whole call, and the grid is unchanged.
+    pub fn see_through<'a>(
         &mut self,
-        pose: Pose2,
-        scan: &PreparedScan,
+        scans: impl IntoIterator<Item = (Pose2, &'a PreparedScan)>,
         max_hits: u16,
     ) -> Result<(), GridError> {
-        if !pose.is_finite() {
+        let scans: Vec<(Pose2, &PreparedScan)> = scans.into_iter().collect();
+        if scans.iter().any(|(pose, _)| !pose.is_finite()) {
             return Err(GridError::NonFinitePose);
         }
-        let origin = self.frame.cell_of(pose.translation());
-        let (s, c) = (pose.theta.sin(), pose.theta.cos());
-        for p in scan.hits().iter().chain(scan.clears()) {
-            let w = Vec2::new(c * p.x - s * p.y + pose.x, s * p.x + c * p.y + pose.y);
-            let tiles = &mut self.tiles;
-            super::raycast::trace(origin, self.frame.cell_of(w), |cell| {
-                let hits = tiles.counts(cell).0;
-                if (1..=max_hits).contains(&hits) {
-                    tiles.add_miss(cell);
-                }
-            });
-        }
+        let Some(bounds) = self.bounds else {
+            return Ok(());
+        };
+        let span = [
+            (i64::from(bounds.min.i), i64::from(bounds.max.i)),
+            (i64::from(bounds.min.j), i64::from(bounds.max.j)),
+        ];
+        let candidates = Candidates::find(&self.tiles, 1..=max_hits);
+        let grid = (&self.tiles, self.frame, span);
+        let misses = sum_in_threads(&scans, candidates.counters(), |chunk, misses| {
+            for &(pose, scan) in chunk {
+                candidates.count_scan(grid, pose, scan, misses);
+            }
+        });
+        candidates.apply(&misses, &mut self.tiles);
         Ok(())
     }
 
@@ -254,6 +309,46 @@ impl OccupancyGrid {
     pub fn allocated_cells(&self) -> usize {
         self.tiles.allocated() * TILE * TILE
     }
+}
+
+/// Splits `items` among the available cores (at most [`MAX_THREADS`], and only when there are
+/// enough to be worth a thread), lets `count` add into a copy of `zero` for each share, and
+/// returns the sum: the same as one pass over all items, whatever the number of threads.
+fn sum_in_threads<T: Sync>(
+    items: &[T],
+    zero: Vec<u64>,
+    count: impl Fn(&[T], &mut [u64]) + Sync,
+) -> Vec<u64> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = cores.min(MAX_THREADS).min(items.len() / MIN_ITEMS_PER_THREAD).max(1);
+    let mut total = zero;
+    if threads == 1 {
+        count(items, &mut total);
+        return total;
+    }
+    let share = items.len().div_ceil(threads);
+    let (first, rest) = items.split_at(share);
+    std::thread::scope(|s| {
+        let others: Vec<_> = rest
+            .chunks(share)
+            .map(|chunk| {
+                let (count, mut sums) = (&count, vec![0; total.len()]);
+                s.spawn(move || {
+                    count(chunk, &mut sums);
+                    sums
+                })
+            })
+            .collect();
+        count(first, &mut total);
+        for other in others {
+            // A thread that panicked would have panicked on this one too: pass it on.
+            let sums = other.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+            for (t, s) in total.iter_mut().zip(sums) {
+                *t += s;
+            }
+        }
+    });
+    total
 }
 
 /// The state of a cell with `h` hits and `m` misses.

@@ -49,6 +49,8 @@ pub struct Tiles {
     th: usize,
     slots: Vec<Option<Box<Tile>>>,
     allocated: usize,
+    /// Whether any count has saturated (and been halved) since the tiles were created.
+    saturated: bool,
 }
 
 fn tile_of(c: Cell) -> (i32, i32) {
@@ -62,6 +64,34 @@ fn offset_in_tile(c: Cell) -> usize {
 impl Tiles {
     pub fn allocated(&self) -> usize {
         self.allocated
+    }
+
+    /// Tiles a rectangle of cells touches.
+    pub fn tiles_in(rect: CellRect) -> usize {
+        let (a, b) = (tile_of(rect.min), tile_of(rect.max));
+        let side = |lo: i32, hi: i32| (i64::from(hi) - i64::from(lo) + 1) as usize;
+        side(a.0, b.0) * side(a.1, b.1)
+    }
+
+    /// Adds `other`'s counts to these, which must cover every tile of `other`. Refuses (false,
+    /// and these counts are then partly added) when a sum would overflow, or either side has
+    /// saturated: only counts that never saturated add up to what one pass of all the updates
+    /// would give (a count saturates at its 65,536th update).
+    pub fn add(&mut self, other: &Tiles) -> bool {
+        if self.saturated || other.saturated {
+            return false;
+        }
+        for (_, corner, from) in other.iter_slots() {
+            let (to, _) = self.tile_mut(corner);
+            let pairs = to.hits.iter_mut().zip(&from.hits);
+            for (t, &f) in pairs.chain(to.misses.iter_mut().zip(&from.misses)) {
+                match t.checked_add(f) {
+                    Some(v) => *t = v,
+                    None => return false,
+                }
+            }
+        }
+        true
     }
 
     /// Heap bytes held: tiles and index.
@@ -85,9 +115,21 @@ impl Tiles {
     }
 
     fn slot(&self, ti: i32, tj: i32) -> Option<usize> {
-        let (u, v) = (ti - self.ti0, tj - self.tj0);
+        self.slot_wide(i64::from(ti), i64::from(tj))
+    }
+
+    /// The index slot of tile (`ti`, `tj`), `None` outside the index; wide coordinates so that
+    /// a walk may ask about cells beyond the i32 range.
+    #[inline]
+    pub fn slot_wide(&self, ti: i64, tj: i64) -> Option<usize> {
+        let (u, v) = (ti - i64::from(self.ti0), tj - i64::from(self.tj0));
         (u >= 0 && v >= 0 && (u as usize) < self.tw && (v as usize) < self.th)
             .then(|| v as usize * self.tw + u as usize)
+    }
+
+    /// Slots in the index (allocated or not).
+    pub fn slot_count(&self) -> usize {
+        self.slots.len()
     }
 
     /// Grows the index to cover `rect` (the caller has checked its size against the extent
@@ -135,10 +177,12 @@ impl Tiles {
     #[inline]
     pub fn add_miss(&mut self, c: Cell) {
         let (t, k) = self.tile_mut(c);
-        if t.misses[k] == u16::MAX {
+        let full = t.misses[k] == u16::MAX;
+        if full {
             t.halve(k);
         }
         t.misses[k] += 1;
+        self.saturated |= full;
     }
 
     /// One miss in every cell of the line from `from` up to, not including, `to`: the cells of
@@ -172,10 +216,12 @@ impl Tiles {
             let (tile, k) = self.tile_mut(cell);
             let mut off = k as isize;
             let mut minor_steps = 0i64;
+            let mut saturated = false;
             for _ in 0..run {
                 let o = off as usize;
                 if tile.misses[o] == u16::MAX {
                     tile.halve(o);
+                    saturated = true;
                 }
                 tile.misses[o] += 1;
                 if err > 0 {
@@ -186,6 +232,7 @@ impl Tiles {
                 off += major_off;
                 err += 2 * minor;
             }
+            self.saturated |= saturated;
             let moved = |a: i32, b: i32| (i64::from(a) * run + i64::from(b) * minor_steps) as i32;
             cell = Cell::new(
                 cell.i + moved(major_step.0, minor_step.0),
@@ -199,10 +246,32 @@ impl Tiles {
     #[inline]
     pub fn add_hit(&mut self, c: Cell) {
         let (t, k) = self.tile_mut(c);
-        if t.hits[k] == u16::MAX {
+        let full = t.hits[k] == u16::MAX;
+        if full {
             t.halve(k);
         }
         t.hits[k] += 1;
+        self.saturated |= full;
+    }
+
+    /// Adds up to `n` misses to `c` one at a time, as [`Self::add_miss`] would, while the cell's
+    /// hits stay in `hits` (halving at saturation can take them out).
+    pub fn add_misses_while(&mut self, c: Cell, mut n: u64, hits: core::ops::RangeInclusive<u16>) {
+        let (t, k) = self.tile_mut(c);
+        let mut saturated = false;
+        while n > 0 && hits.contains(&t.hits[k]) {
+            let room = u64::from(u16::MAX - t.misses[k]);
+            if n <= room {
+                t.misses[k] += n as u16;
+                break;
+            }
+            t.misses[k] = u16::MAX;
+            t.halve(k);
+            t.misses[k] += 1;
+            n -= room + 1;
+            saturated = true;
+        }
+        self.saturated |= saturated;
     }
 
     /// (hits, misses) of a cell; (0, 0) where nothing was ever observed.
@@ -219,10 +288,15 @@ impl Tiles {
 
     /// Every allocated tile with the cell of its lower-left corner.
     pub fn iter(&self) -> impl Iterator<Item = (Cell, &Tile)> + '_ {
+        self.iter_slots().map(|(_, corner, t)| (corner, t))
+    }
+
+    /// Every allocated tile with its index slot and the cell of its lower-left corner.
+    pub fn iter_slots(&self) -> impl Iterator<Item = (usize, Cell, &Tile)> + '_ {
         self.slots.iter().enumerate().filter_map(move |(k, t)| {
             let (u, v) = ((k % self.tw) as i32, (k / self.tw) as i32);
             let corner = Cell::new((self.ti0 + u) << TILE_SHIFT, (self.tj0 + v) << TILE_SHIFT);
-            t.as_deref().map(|t| (corner, t))
+            t.as_deref().map(|t| (k, corner, t))
         })
     }
 }
@@ -312,6 +386,25 @@ mod tests {
         let (h, m) = t.counts(c);
         let ratio = f64::from(h) / (f64::from(h) + f64::from(m));
         assert!((ratio - 1.0 / 3.0).abs() < 0.01, "{h} hits, {m} misses");
+    }
+
+    #[test]
+    fn adding_counts_refuses_sums_that_overflow_and_counts_that_saturated() {
+        let c = Cell::new(-3, 70);
+        let with = |hits: u32, misses: u32| {
+            let mut t = Tiles::default();
+            t.cover(CellRect::of(c));
+            (0..hits).for_each(|_| t.add_hit(c));
+            (0..misses).for_each(|_| t.add_miss(c));
+            t
+        };
+        let mut a = with(3, 40_000);
+        assert!(a.add(&with(2, 25_535)));
+        assert_eq!(a.counts(c), (5, u16::MAX));
+        assert!(!with(3, 40_000).add(&with(0, 25_536)), "the sum overflows");
+        // Saturated on its own: the halving depended on what came first, so no sum is right.
+        assert!(!with(1, 0).add(&with(3, 70_000)));
+        assert!(!with(3, 70_000).add(&with(1, 0)));
     }
 
     #[test]
