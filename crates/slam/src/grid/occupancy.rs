@@ -205,7 +205,12 @@ impl OccupancyGrid {
         let (a, b) = std::thread::scope(|s| {
             let other = s.spawn(|| insert_all(second));
             let a = insert_all(first);
-            (a, other.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            (
+                a,
+                other
+                    .join()
+                    .unwrap_or_else(|e| std::panic::resume_unwind(e)),
+            )
         });
         let (mut grid, b) = (a?, b?);
         let rect = grid.bounds?.union(b.bounds?);
@@ -320,7 +325,10 @@ fn sum_in_threads<T: Sync>(
     count: impl Fn(&[T], &mut [u64]) + Sync,
 ) -> Vec<u64> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let threads = cores.min(MAX_THREADS).min(items.len() / MIN_ITEMS_PER_THREAD).max(1);
+    let threads = cores
+        .min(MAX_THREADS)
+        .min(items.len() / MIN_ITEMS_PER_THREAD)
+        .max(1);
     let mut total = zero;
     if threads == 1 {
         count(items, &mut total);
@@ -342,7 +350,9 @@ fn sum_in_threads<T: Sync>(
         count(first, &mut total);
         for other in others {
             // A thread that panicked would have panicked on this one too: pass it on.
-            let sums = other.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+            let sums = other
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e));
             for (t, s) in total.iter_mut().zip(sums) {
                 *t += s;
             }
