@@ -19,6 +19,7 @@
 use super::attitude::Tilt;
 use super::ekf::{ix, Ekf, Outcome, N};
 use super::imu::rotation;
+use crate::matching::linalg::sym2_eigen;
 use nalgebra::{Matrix2, Matrix3, SMatrix, Vector2, Vector3};
 
 /// Drag model settings.
@@ -38,6 +39,23 @@ pub struct DragConfig {
     /// velocity after a lidar loss follows the accelerometer's noise, the hold chases it, and
     /// the vehicle strays further (BENCHMARKS.md, closed-loop flight).
     pub specific_force_std_m_s2: f32,
+    /// One-sigma of the window's mean along a horizontal direction whose velocity the lidar
+    /// does not observe (m/s^2): the figure the widened `specific_force_std_m_s2` is made of,
+    /// unwidened. Down a featureless corridor the scan match says nothing of the speed along
+    /// it, and the drag reading is the only thing that bounds it; at the widened figure the
+    /// speed's one-sigma grows about 0.1 m/s a second there and the estimate is lost within
+    /// seconds of a blank stretch of wall, while holding on a noisy drag speed along one axis
+    /// is the lesser harm. Along the observed direction the widened figure stays, so a hold
+    /// and a flight the lidar sees are unchanged.
+    pub unobserved_specific_force_std_m_s2: f32,
+    /// A horizontal direction counts as unobserved while the filter's velocity one-sigma
+    /// along it exceeds this (m/s). With the lidar matching, the velocity is known to a few
+    /// cm/s on every axis; a blank corridor passes 0.1 m/s about a second into the blank.
+    pub unobserved_velocity_std_m_s: f32,
+    /// ... and exceeds this many times the one-sigma across it: a direction is unobserved
+    /// when the lidar sees the other one, not when the match is merely noisy on both (a hold
+    /// with a slow lidar).
+    pub unobserved_std_ratio: f32,
     /// Normalised innovation squared above which a window is rejected. Tighter than the
     /// EKF's general gate: a window that overlaps a push or a bump carries a force this model
     /// does not know, and at the general gate the edges of seed 000's push passed and bent the
@@ -59,6 +77,9 @@ impl Default for DragConfig {
             drag_per_s: 0.1,
             window_s: 0.1,
             specific_force_std_m_s2: 0.3,
+            unobserved_specific_force_std_m_s2: 0.1,
+            unobserved_velocity_std_m_s: 0.15,
+            unobserved_std_ratio: 2.0,
             // Chi-square 99 % for two dimensions.
             gate_nis: 9.21,
             without_lidar: false,
@@ -137,8 +158,7 @@ impl Ekf {
             h[(i, ix::TILT)] = -k * d_tilt[(i, 0)];
             h[(i, ix::TILT + 1)] = -k * d_tilt[(i, 1)];
         }
-        let sigma = c.specific_force_std_m_s2;
-        let r = Matrix2::identity() * (sigma * sigma);
+        let r = self.drag_noise(c, &rt);
         let position = [
             ix::POS,
             ix::POS + 1,
@@ -148,6 +168,34 @@ impl Ekf {
             ix::CLONE + 2,
         ];
         self.update_considering(residual, h, r, &position, c.gate_nis)
+    }
+
+    /// The measurement covariance in body x/y: `specific_force_std_m_s2` on both axes, except
+    /// along the horizontal direction of the largest velocity variance while its one-sigma
+    /// exceeds `unobserved_velocity_std_m_s`, which gets `unobserved_specific_force_std_m_s2`.
+    /// `rt` turns world vectors into the body frame.
+    fn drag_noise(&self, c: &DragConfig, rt: &Matrix3<f32>) -> Matrix2<f32> {
+        let wide = c.specific_force_std_m_s2 * c.specific_force_std_m_s2;
+        let r = Matrix2::identity() * wide;
+        let (vx, vy) = (ix::VEL, ix::VEL + 1);
+        let p = &self.p;
+        let (largest, smallest, smallest_axis) =
+            sym2_eigen(p[(vx, vx)], p[(vx, vy)], p[(vy, vy)]);
+        let threshold = c.unobserved_velocity_std_m_s;
+        let ratio = c.unobserved_std_ratio;
+        if !(largest > threshold * threshold && largest > ratio * ratio * smallest) {
+            return r;
+        }
+        // The direction of the largest variance, in the body x/y plane (the tilt shortens it).
+        let weak = rt * Vector3::new(-smallest_axis.y, smallest_axis.x, 0.0);
+        let b = Vector2::new(weak.x, weak.y);
+        let norm = b.norm();
+        if !(norm > 0.5) {
+            return r;
+        }
+        let b = b / norm;
+        let tight = c.unobserved_specific_force_std_m_s2 * c.unobserved_specific_force_std_m_s2;
+        r - b * b.transpose() * (wide - tight)
     }
 }
 

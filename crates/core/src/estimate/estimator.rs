@@ -274,3 +274,7 @@ impl Estimator {
 #[cfg(test)]
 #[path = "estimator_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "corridor_tests.rs"]
+mod corridor_tests;

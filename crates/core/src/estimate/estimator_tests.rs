@@ -7,7 +7,7 @@ use crate::msgs::{ScanMatchStatus, GRAVITY_M_S2};
 use nalgebra::{Matrix4, Vector4};
 
 /// Deterministic normal samples for the tests (xorshift64* and Box-Muller).
-struct Gauss(u64);
+pub(super) struct Gauss(pub(super) u64);
 
 impl Gauss {
     fn uniform(&mut self) -> f32 {
@@ -18,7 +18,7 @@ impl Gauss {
         (bits as f32 + 0.5) / (1u64 << 24) as f32
     }
 
-    fn normal(&mut self, sigma: f32) -> f32 {
+    pub(super) fn normal(&mut self, sigma: f32) -> f32 {
         let (u1, u2) = (self.uniform(), self.uniform());
         sigma * sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(2.0 * core::f32::consts::PI * u2)
     }
