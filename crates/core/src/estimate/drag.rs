@@ -298,6 +298,28 @@ mod tests {
     }
 
     #[test]
+    fn the_noise_is_unwidened_only_along_an_unobserved_direction() {
+        let c = DragConfig::default();
+        let (wide, tight) = (0.3f32 * 0.3, 0.1f32 * 0.1);
+        // Heading +y (body x is world y), level; velocity variance `along` on world y, `across`
+        // on world x.
+        let noise = |along: f32, across: f32| {
+            let mut f = Ekf::new(EkfConfig::default());
+            f.x[ix::YAW] = core::f32::consts::FRAC_PI_2;
+            f.p[(ix::VEL, ix::VEL)] = across;
+            f.p[(ix::VEL + 1, ix::VEL + 1)] = along;
+            let rt = rotation(&Tilt::LEVEL, libm::sincosf(f.x[ix::YAW])).transpose();
+            f.drag_noise(&c, &rt)
+        };
+        let close = |a: Matrix2<f32>, b: Matrix2<f32>| (a - b).abs().max() < 1e-6;
+        // A corridor along world y: unwidened on body x only.
+        assert!(close(noise(0.25, 0.01), Matrix2::new(tight, 0.0, 0.0, wide)));
+        // Known on both axes, or unknown on both (a slow lidar): widened on both.
+        assert!(close(noise(0.01, 0.01), Matrix2::identity() * wide));
+        assert!(close(noise(0.25, 0.2), Matrix2::identity() * wide));
+    }
+
+    #[test]
     fn no_drag_coefficient_means_no_measurement() {
         let mut f = Ekf::new(EkfConfig::default());
         let c = DragConfig {
