@@ -179,8 +179,7 @@ impl Ekf {
         let r = Matrix2::identity() * wide;
         let (vx, vy) = (ix::VEL, ix::VEL + 1);
         let p = &self.p;
-        let (largest, smallest, smallest_axis) =
-            sym2_eigen(p[(vx, vx)], p[(vx, vy)], p[(vy, vy)]);
+        let (largest, smallest, smallest_axis) = sym2_eigen(p[(vx, vx)], p[(vx, vy)], p[(vy, vy)]);
         let threshold = c.unobserved_velocity_std_m_s;
         let ratio = c.unobserved_std_ratio;
         if !(largest > threshold * threshold && largest > ratio * ratio * smallest) {
@@ -190,7 +189,7 @@ impl Ekf {
         let weak = rt * Vector3::new(-smallest_axis.y, smallest_axis.x, 0.0);
         let b = Vector2::new(weak.x, weak.y);
         let norm = b.norm();
-        if !(norm > 0.5) {
+        if !norm.is_finite() || norm <= 0.5 {
             return r;
         }
         let b = b / norm;
@@ -313,7 +312,10 @@ mod tests {
         };
         let close = |a: Matrix2<f32>, b: Matrix2<f32>| (a - b).abs().max() < 1e-6;
         // A corridor along world y: unwidened on body x only.
-        assert!(close(noise(0.25, 0.01), Matrix2::new(tight, 0.0, 0.0, wide)));
+        assert!(close(
+            noise(0.25, 0.01),
+            Matrix2::new(tight, 0.0, 0.0, wide)
+        ));
         // Known on both axes, or unknown on both (a slow lidar): widened on both.
         assert!(close(noise(0.01, 0.01), Matrix2::identity() * wide));
         assert!(close(noise(0.25, 0.2), Matrix2::identity() * wide));
