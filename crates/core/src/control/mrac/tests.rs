@@ -244,6 +244,28 @@ fn bad_inputs_are_refused_without_changing_state() {
     assert_eq!(Mrac::<4>::new(c).unwrap_err().field, "pd_xy.kp_per_s2");
 }
 
+/// The ramp's x position, velocity and acceleration at `t` s from its start: still before,
+/// 1 m/s² for 1 s, then 1 m/s of cruise.
+fn ramp(t: f32) -> (f32, f32, f32) {
+    if t < 0.0 {
+        (0.0, 0.0, 0.0)
+    } else if t < 1.0 {
+        (0.5 * t * t, t, 1.0)
+    } else {
+        (0.5 + (t - 1.0), 1.0, 0.0)
+    }
+}
+
+/// The ramp at `t` as the MRAC's path command.
+fn ramp_track(t: f32) -> Command {
+    let (p, v, a) = ramp(t);
+    Command::Track {
+        position_m: p,
+        velocity_m_s: v,
+        accel_m_s2: a,
+    }
+}
+
 /// A horizontal point mass along x whose acceleration follows the pseudo-control with a
 /// first-order lag `lag_s` (the attitude loop's) less a linear drag `drag_per_s` on its
 /// velocity. It flies, baseline only, a setpoint that rests for 1 s, accelerates at 1 m/s^2
@@ -257,18 +279,8 @@ fn flies_the_ramp(config: MracConfig, lag_s: f32, drag_per_s: f32) -> (f32, f32)
     let mut error = 0.0;
     for k in 0..1200 {
         let t = k as f32 * DT - 1.0;
-        let (p, v, a) = if t < 0.0 {
-            (0.0, 0.0, 0.0)
-        } else if t < 1.0 {
-            (0.5 * t * t, t, 1.0)
-        } else {
-            (0.5 + (t - 1.0), 1.0, 0.0)
-        };
-        let track = Command::Track {
-            position_m: p,
-            velocity_m_s: v,
-            accel_m_s2: a,
-        };
+        let (p, v, a) = ramp(t);
+        let track = ramp_track(t);
         let nu = m.step([track, Command::Off, Command::Off], &state, DT, true);
         accel += (nu.unwrap()[0] - accel) * DT / (lag_s + DT);
         state.velocity_m_s[0] += (accel - drag_per_s * state.velocity_m_s[0]) * DT;
@@ -346,18 +358,8 @@ fn ramp_error_with_thrust_scale(thrust_scale: f32) -> f32 {
     let mut worst: f32 = 0.0;
     for k in 0..2150 {
         let t = k as f32 * DT - 20.0;
-        let (p, v, a) = if t < 0.0 {
-            (0.0, 0.0, 0.0)
-        } else if t < 1.0 {
-            (0.5 * t * t, t, 1.0)
-        } else {
-            (0.5 + (t - 1.0), 1.0, 0.0)
-        };
-        let track = Command::Track {
-            position_m: p,
-            velocity_m_s: v,
-            accel_m_s2: a,
-        };
+        let (p, v, a) = ramp(t);
+        let track = ramp_track(t);
         let nu = m
             .step(
                 [track, Command::Off, Command::Position(1.0)],
