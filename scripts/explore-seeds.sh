@@ -21,7 +21,10 @@ if [[ -z ${BIN:-} ]]; then
 fi
 bin=${BIN:-target/release/plumbline}
 rows=$(mktemp)
-trap 'rm -f "$rows"' EXIT
+flights=$(mktemp -d)
+trap 'rm -rf "$rows" "$flights"' EXIT
+# Each flight writes its row to a file of its own, so rows from parallel jobs never interleave;
+# they are printed in seed order once a world's flights are done.
 fly() {
   local world=$1 guidance=$2 seed=$3
   "$bin" sim --world "$world" --scenario explore --lidar "$lidar" --guidance "$guidance" \
@@ -32,14 +35,17 @@ f = lambda k: "" if s.get(k) is None else (f"{s[k]:.4f}" if isinstance(s[k], flo
 print("\t".join([s["world"], s["guidance"], str(s["seed"])] + [f(k) for k in (
     "explored_fraction", "time_to_90pct_s", "collisions", "min_clearance_m", "returned_home",
     "home_error_m", "landed", "map_error_m", "distance_flown_m", "energy_wh", "realtime_factor",
-    "failsafe", "status")]))'
+    "failsafe", "status")]))' >"$flights/$world.$guidance.$seed"
 }
 export -f fly
-export bin lidar duration
+export bin lidar duration flights
 printf 'world\tguidance\tseed\texplored\tt90_s\tcollisions\tmin_clearance_m\treturned\thome_error_m\tlanded\tmap_error_m\tdistance_m\tenergy_wh\trealtime\tfailsafe\tstatus\n'
 for world in $worlds; do
   for guidance in $guidances; do
     seq "$first" $((first + seeds - 1)) | xargs -P "$jobs" -I{} bash -c "fly $world $guidance {}"
+    for seed in $(seq "$first" $((first + seeds - 1))); do
+      cat "$flights/$world.$guidance.$seed"
+    done
   done
 done | tee "$rows"
 python3 - "$rows" <<'PY' >&2
