@@ -23,11 +23,18 @@ pub struct Tilt {
     pub lift_m_s2: f32,
 }
 
+/// The vertical specific force (m/s^2) the inversion asks for a vertical acceleration
+/// `accel_z_m_s2`: gravity plus it, never less than 30 % of gravity so the vehicle stays upright.
+#[inline(always)]
+pub fn lift_for(accel_z_m_s2: f32) -> f32 {
+    (GRAVITY_M_S2 + accel_z_m_s2).max(0.3 * GRAVITY_M_S2)
+}
+
 /// `f_hat^-1` for the attitude: world acceleration (m/s^2, z up) to roll, pitch and lift at
 /// heading `yaw_rad`, the horizontal part scaled down to fit `max_tilt_rad`.
 #[inline(always)]
 pub fn tilt_for(accel_m_s2: [f32; 3], yaw_rad: f32, max_tilt_rad: f32) -> Tilt {
-    let lift = (GRAVITY_M_S2 + accel_m_s2[2]).max(0.3 * GRAVITY_M_S2);
+    let lift = lift_for(accel_m_s2[2]);
     // Horizontal demand rotated into the heading frame, bounded by the tilt limit.
     let (s, co) = sincosf(yaw_rad);
     let mut ax = co * accel_m_s2[0] + s * accel_m_s2[1];

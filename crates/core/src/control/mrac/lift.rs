@@ -12,10 +12,7 @@
 //! demands its inputs do not show (the PD's share). One thrust acts along body z for all three
 //! axes, so the vertical channel's ratio is applied to the horizontal demands instead.
 
-use crate::msgs::GRAVITY_M_S2;
-
-/// The lift floor of the inversion ([`crate::control::inversion::tilt_for`]): 30 % of gravity.
-const LIFT_FLOOR_M_S2: f32 = 0.3 * GRAVITY_M_S2;
+use crate::control::inversion::lift_for;
 
 /// The thrust scale errors the ratio may stand for: from half to twice the model's lift
 /// (a vehicle at twice its configured mass, or half). Outside this the vertical element is
@@ -28,13 +25,13 @@ const SCALE_RANGE: (f32, f32) = (0.5, 2.0);
 /// (without it): the lift asked of the inversion over the lift the vehicle gets. Exactly 1
 /// when the adaptive element adds nothing vertically.
 pub fn horizontal_scale(wanted_z_m_s2: f32, commanded_z_m_s2: f32) -> f32 {
-    let lift = |a: f32| (GRAVITY_M_S2 + a).max(LIFT_FLOOR_M_S2);
-    (lift(commanded_z_m_s2) / lift(wanted_z_m_s2)).clamp(SCALE_RANGE.0, SCALE_RANGE.1)
+    (lift_for(commanded_z_m_s2) / lift_for(wanted_z_m_s2)).clamp(SCALE_RANGE.0, SCALE_RANGE.1)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::msgs::GRAVITY_M_S2;
 
     #[test]
     fn the_ratio_of_the_lifts_within_its_range() {
