@@ -6,6 +6,13 @@
 //! So before every match the guess is scored against a likelihood grid of the current keyframe
 //! (about a hundred look-ups); only when it fits badly does a branch-and-bound correlative
 //! search over a wide window (Olson 2009) run and hand the tracker a better guess.
+//!
+//! A 180° lidar that turned most of a half turn between two scans shares only a sliver of its
+//! view with the keyframe, and no pose fits that keyframe well. The vehicle has usually seen
+//! the rest of the place on the way there, so the search is then made again against the last
+//! keyframes together: the local map. It is not made first: along a corridor the older
+//! keyframes carry the tracker's drift, and a scan fits them in more places than it fits the
+//! keyframe it is matched against.
 
 use crate::config::GuardConfig;
 use crate::correlative::{LookupGrid, MotionPrior, Window};
@@ -19,6 +26,9 @@ pub enum Guarded {
     GuessKept,
     /// The guess fit badly and the search found a better one.
     Searched { score: f32 },
+    /// The guess fit badly, the keyframe alone held nothing better, and the last keyframes
+    /// together (the local map) did.
+    SearchedMap { score: f32 },
     /// The guess fit badly and the search found nothing better.
     NothingBetter,
 }
@@ -30,6 +40,8 @@ pub struct GuessGuard {
     keyframe: Option<usize>,
     check: Option<LookupGrid>,
     search: Option<LookupGrid>,
+    /// The last keyframes (the current one last), for the search against the local map.
+    recent: std::collections::VecDeque<Keyframe>,
 }
 
 impl GuessGuard {
@@ -39,6 +51,7 @@ impl GuessGuard {
             keyframe: None,
             check: None,
             search: None,
+            recent: std::collections::VecDeque::new(),
         }
     }
 
@@ -69,6 +82,10 @@ impl GuessGuard {
             self.check = Some(LookupGrid::new(&reference, 0.0, &cfg.correlative, 1));
             self.search = None;
             self.keyframe = Some(index);
+            self.recent.push_back(keyframe.clone());
+            while self.recent.len() > cfg.map_keyframes.max(1) {
+                self.recent.pop_front();
+            }
         }
         let Some(check) = &self.check else {
             return (Guarded::GuessKept, None);
@@ -105,16 +122,42 @@ impl GuessGuard {
             heading_rad: std::f32::consts::PI,
         };
         let floor = (guess_score * cfg.min_gain).max(cfg.min_found_score);
+        let passes = [(window, prior), (widest, MotionPrior::default())];
         // The penalised winner is the answer; its own fit decides whether it is good enough.
-        [(window, prior), (widest, MotionPrior::default())]
-            .into_iter()
-            .find_map(|(window, prior)| {
-                search
-                    .search_near(points, guess, window, prior, 0.0, &cfg.correlative)
+        let best_in = |grid: &LookupGrid| {
+            passes.into_iter().find_map(|(window, prior)| {
+                grid.search_near(points, guess, window, prior, 0.0, &cfg.correlative)
                     .filter(|found| found.score >= floor)
             })
-            .map_or((Guarded::NothingBetter, None), |found| {
-                (Guarded::Searched { score: found.score }, Some(found.pose))
+        };
+        if let Some(found) = best_in(search) {
+            return (Guarded::Searched { score: found.score }, Some(found.pose));
+        }
+        if cfg.map_keyframes <= 1 {
+            return (Guarded::NothingBetter, None);
+        }
+        let local = self.local_map(keyframe, reach);
+        best_in(&local).map_or((Guarded::NothingBetter, None), |found| {
+            (
+                Guarded::SearchedMap { score: found.score },
+                Some(found.pose),
+            )
+        })
+    }
+
+    /// A search pyramid of the last keyframes, in the frame of `keyframe` (the current one),
+    /// their points within `reach` of it.
+    fn local_map(&self, keyframe: &Keyframe, reach: f32) -> LookupGrid {
+        let to_current = keyframe.tracking_pose.inverse();
+        let points: Vec<Vec2> = self
+            .recent
+            .iter()
+            .flat_map(|k| {
+                let pose = to_current.compose(k.tracking_pose);
+                k.points().map(move |p| pose.transform(p))
             })
+            .filter(|p| p.norm() <= reach)
+            .collect();
+        LookupGrid::new(&points, 0.5, &self.config.correlative, 5)
     }
 }

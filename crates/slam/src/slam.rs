@@ -118,7 +118,9 @@ impl<'m, const N: usize> Slam<'m, N> {
         self.stats.lost_intervals += (tracked.predicted && !self.lost) as usize;
         self.lost = tracked.predicted;
         match tracked.guess {
-            Guarded::Searched { .. } => self.stats.guess_searches_used += 1,
+            Guarded::Searched { .. } | Guarded::SearchedMap { .. } => {
+                self.stats.guess_searches_used += 1
+            }
             Guarded::NothingBetter => self.stats.guess_searches_failed += 1,
             Guarded::GuessKept => {}
         }

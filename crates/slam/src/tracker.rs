@@ -197,7 +197,7 @@ impl<'m, const N: usize> Tracker<'m, N> {
             .guard
             .check(keyframe, self.keyframes, &points, guess, gap_s)
         {
-            (checked @ Guarded::Searched { .. }, Some(found)) => (
+            (checked @ (Guarded::Searched { .. } | Guarded::SearchedMap { .. }), Some(found)) => (
                 checked,
                 Some(
                     self.last_pose
