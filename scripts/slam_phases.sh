@@ -5,7 +5,7 @@
 # relation survives thinning only if both its scans do, about 1 in k², so MIT every 8th keeps
 # 1-5), the position error against the full-rate SLAM trajectory at the same stamps after the
 # best rigid fit (RMS and largest, m: this one sees a divergence whatever relations survive),
-# and what the run reported about being lost.
+# and what the run reported about being lost (and the wide searches the local map contradicted).
 #   bash scripts/slam_phases.sh            (BIN=path/to/plumbline to measure another binary)
 #   JOBS=2 runs two phases at a time.
 set -euo pipefail
@@ -54,7 +54,8 @@ rel = f"{e['trans_mean_m']:.4f}" if e.get("matched") else "-"
 print("\t".join([name, f"trans_mean_m={rel}", f"matched={e.get('matched', 0)}",
                  f"rms_vs_full_m={rms:.3f}", f"max_vs_full_m={max(err):.2f}",
                  f"predicted_scans={s['predicted_scans']}", f"lost_s={s['lost_s']:.1f}",
-                 f"relocalizations={s['relocalizations']}"]))
+                 f"relocalizations={s['relocalizations']}",
+                 f"relocalizations_unconfirmed={s['relocalizations_unconfirmed']}"]))
 PY
   rm -f "$f.clf" "$f.txt"
 }

@@ -54,3 +54,100 @@ fn intel_thinned_to_every_4th_and_8th_scan_stays_within_twice_the_full_rate_erro
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `(stamp, x, y)` of every pose of a trajectory file.
+fn positions(path: &Path) -> Vec<(String, f64, f64)> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            (
+                f[0].to_string(),
+                f[1].parse().unwrap(),
+                f[2].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// The largest distance between `thin`'s positions and `full`'s at the same stamps once the
+/// rigid motion that best lays one on the other (least squares) is taken out, m.
+fn largest_departure(full: &Path, thin: &Path) -> f64 {
+    let full = positions(full);
+    // Full-rate x, y, then thinned x, y, at each common stamp.
+    let pairs: Vec<[f64; 4]> = positions(thin)
+        .into_iter()
+        .filter_map(|(t, x, y)| {
+            full.iter()
+                .find(|(s, _, _)| *s == t)
+                .map(|&(_, fx, fy)| [fx, fy, x, y])
+        })
+        .collect();
+    assert!(pairs.len() > 10, "too few common stamps: {}", pairs.len());
+    let mean = |i: usize| pairs.iter().map(|p| p[i]).sum::<f64>() / pairs.len() as f64;
+    let (ax, ay, bx, by) = (mean(0), mean(1), mean(2), mean(3));
+    let (mut dot, mut cross) = (0.0, 0.0);
+    for [fx, fy, x, y] in &pairs {
+        let (u, v, p, q) = (x - bx, y - by, fx - ax, fy - ay);
+        dot += u * p + v * q;
+        cross += u * q - v * p;
+    }
+    let (s, c) = cross.atan2(dot).sin_cos();
+    pairs
+        .iter()
+        .map(|[fx, fy, x, y]| {
+            let (u, v) = (x - bx, y - by);
+            (c * u - s * v + ax - fx).hypot(s * u + c * v + ay - fy)
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn mit_thinned_to_every_8th_scan_reports_where_its_path_leaves_the_full_rate_one() {
+    let Some(d) = shared_data() else { return };
+    let dir = std::env::temp_dir().join(format!("plumbline-mit-thinned-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = d.join("mit-csail/mit-csail.clf");
+    let (full, thin, thin_log) = (
+        dir.join("full.txt"),
+        dir.join("every8.txt"),
+        dir.join("every8.clf"),
+    );
+    let full_summary = ok_json(&[
+        "slam",
+        log.to_str().unwrap(),
+        "--out",
+        full.to_str().unwrap(),
+        "--json",
+    ]);
+    // At full rate every wide search the map contradicts would be a false alarm.
+    assert_eq!(
+        full_summary["relocalizations_unconfirmed"], 0,
+        "{full_summary}"
+    );
+    thinned(&log, 8, &thin_log);
+    let summary = ok_json(&[
+        "slam",
+        thin_log.to_str().unwrap(),
+        "--out",
+        thin.to_str().unwrap(),
+        "--json",
+    ]);
+    let departure = largest_departure(&full, &thin);
+    println!("every 8th: {departure:.2} m at most from the full-rate path\n{summary}");
+    // Turns of up to 170° between scans: the guard finds a pose for every scan, the local
+    // map standing in when the keyframe shares too little of the view…
+    assert_eq!(summary["relocalizations_failed"], 0, "{summary}");
+    // …and a path that leaves the full-rate one does not do so silently.
+    if departure > 1.0 {
+        let reported = summary["relocalizations_unconfirmed"].as_u64().unwrap()
+            + summary["lost_intervals"].as_u64().unwrap();
+        assert!(
+            reported > 0,
+            "{departure} m off, nothing reported: {summary}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -49,6 +49,9 @@ pub struct TrackingStats {
     /// Motion guesses that fit badly and were replaced by a wide search, or could not be.
     pub guess_searches_used: usize,
     pub guess_searches_failed: usize,
+    /// Of the searches used, those whose pose the local map then contradicted
+    /// ([`crate::tracker::Tracked::unconfirmed`]): likely a wrong relocalization.
+    pub guess_searches_unconfirmed: usize,
 }
 
 /// Where the backend runs.
@@ -117,6 +120,7 @@ impl<'m, const N: usize> Slam<'m, N> {
         self.stats.predicted_scans += tracked.predicted as usize;
         self.stats.lost_intervals += (tracked.predicted && !self.lost) as usize;
         self.lost = tracked.predicted;
+        self.stats.guess_searches_unconfirmed += tracked.unconfirmed as usize;
         match tracked.guess {
             Guarded::Searched { .. } | Guarded::SearchedMap { .. } => {
                 self.stats.guess_searches_used += 1

@@ -8,7 +8,9 @@ use crate::guard::{Guarded, GuessGuard};
 use crate::keyframe::Keyframe;
 use crate::observed::Observed;
 use plumbline_core::geom::Pose2;
-use plumbline_core::matching::local_map::{LineMap, MapCell, MapUse, MappedOdometry};
+use plumbline_core::matching::local_map::{
+    LineMap, MapCell, MapUse, MappedOdometry, RefineRefusal,
+};
 use plumbline_core::matching::OdometryStep;
 use plumbline_core::scan::sweep::SweepMotion;
 use plumbline_core::scan::Scan;
@@ -26,6 +28,10 @@ pub struct Tracked {
     /// matched (the first scan, a prediction).
     pub observed: Option<Observed>,
     pub guess: Guarded,
+    /// The guess came from a wide search, and the local map refused the keyframe the match
+    /// made from it as a correction it cannot have drifted by: the search and the map
+    /// disagree about where the vehicle is, and the pose may be wrong.
+    pub unconfirmed: bool,
 }
 
 /// The local map could not be made from the configuration.
@@ -149,6 +155,15 @@ impl<'m, const N: usize> Tracker<'m, N> {
         ) {
             self.last_matched_s = scan.stamp_s;
         }
+        let searched = matches!(
+            guess,
+            Guarded::Searched { .. } | Guarded::SearchedMap { .. }
+        );
+        let contradicted = matches!(
+            step.map,
+            MapUse::Refused(RefineRefusal::Diverged | RefineRefusal::Implausible { .. })
+        );
+        let unconfirmed = searched && contradicted;
         self.last_motion = self.last_pose.between(pose);
         self.last_pose = pose;
         let keyframe = (!matches!(step.map, MapUse::NotKeyframe)).then(|| {
@@ -168,6 +183,7 @@ impl<'m, const N: usize> Tracker<'m, N> {
             predicted: matches!(step.step, OdometryStep::Predicted { .. }),
             observed,
             guess,
+            unconfirmed,
         }
     }
 

@@ -222,6 +222,7 @@ pub fn run(args: SlamArgs) -> CliResult {
         "keyframes_thinned": stats.thinned,
         "relocalizations": tracking.guess_searches_used,
         "relocalizations_failed": tracking.guess_searches_failed,
+        "relocalizations_unconfirmed": tracking.guess_searches_unconfirmed,
         "predicted_scans": tracking.predicted_scans,
         "lost_intervals": tracking.lost_intervals,
         "lost_s": lost_s,
