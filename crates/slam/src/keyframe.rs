@@ -15,7 +15,9 @@ pub struct Keyframe {
     pub submap: usize,
     /// Distance travelled from the first keyframe to this one along the tracked path, m.
     pub path_m: f32,
-    /// The keyframe came from a failed match: its pose is a prediction, its edge a guess.
+    /// The keyframe came from a failed match, or from a wide search whose pose the local map
+    /// contradicted: its pose is a guess, and so is its edge in the graph (a weak one, which a
+    /// loop closure can bend).
     pub predicted: bool,
 }
 

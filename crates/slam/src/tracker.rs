@@ -171,7 +171,7 @@ impl<'m, const N: usize> Tracker<'m, N> {
                 self.path_m += previous.tracking_pose.between(pose).translation().norm();
             }
             let submap = self.keyframes / self.config.keyframes_per_submap.max(1);
-            let predicted = matches!(step.map, MapUse::Skipped);
+            let predicted = matches!(step.map, MapUse::Skipped) || unconfirmed;
             let kf = Keyframe::new(scan, pose, submap, self.path_m, predicted);
             self.keyframe = Some(kf.clone());
             self.keyframes += 1;
