@@ -55,7 +55,7 @@ print("\t".join([name, f"trans_mean_m={rel}", f"matched={e.get('matched', 0)}",
                  f"rms_vs_full_m={rms:.3f}", f"max_vs_full_m={max(err):.2f}",
                  f"predicted_scans={s['predicted_scans']}", f"lost_s={s['lost_s']:.1f}",
                  f"relocalizations={s['relocalizations']}",
-                 f"relocalizations_unconfirmed={s['relocalizations_unconfirmed']}"]))
+                 f"relocalizations_unconfirmed={s.get('relocalizations_unconfirmed', '-')}"]))
 PY
   rm -f "$f.clf" "$f.txt"
 }
