@@ -96,52 +96,45 @@ impl LookupGrid {
         let height = (((hi.y - lo.y + 2.0 * margin_m) / res).ceil() as i32 + 1).max(1);
         let mut base = vec![0u8; (width * height) as usize];
         let kernel = gaussian_kernel(res, config.sigma_m);
+        let side = (2 * KERNEL_CELLS + 1) as usize;
         for p in points.iter().filter(|p| p.is_finite()) {
             let cx = ((p.x - origin.x) / res) as i32;
             let cy = ((p.y - origin.y) / res) as i32;
-            for dy in -KERNEL_CELLS..=KERNEL_CELLS {
-                for dx in -KERNEL_CELLS..=KERNEL_CELLS {
-                    let (x, y) = (cx + dx, cy + dy);
-                    if x < 0 || y < 0 || x >= width || y >= height {
-                        continue;
-                    }
-                    let v = kernel[((dy + KERNEL_CELLS) * (2 * KERNEL_CELLS + 1)
-                        + dx
-                        + KERNEL_CELLS) as usize];
-                    let cell = &mut base[(y * width + x) as usize];
+            // The kernel's columns and rows that land on the grid.
+            let (x0, x1) = (
+                cx.saturating_sub(KERNEL_CELLS).max(0),
+                cx.saturating_add(KERNEL_CELLS).min(width - 1),
+            );
+            let (y0, y1) = (
+                cy.saturating_sub(KERNEL_CELLS).max(0),
+                cy.saturating_add(KERNEL_CELLS).min(height - 1),
+            );
+            if x0 > x1 {
+                continue;
+            }
+            let kx = (x0 - (cx - KERNEL_CELLS)) as usize;
+            let columns = (x1 - x0 + 1) as usize;
+            for y in y0..=y1 {
+                let ky = (y - (cy - KERNEL_CELLS)) as usize;
+                let weights = &kernel[ky * side + kx..][..columns];
+                let start = (y * width + x0) as usize;
+                for (cell, &v) in base[start..start + columns].iter_mut().zip(weights) {
                     *cell = (*cell).max(v);
                 }
             }
         }
-        let mut grid = Self {
+        let mut levels_built = vec![base];
+        for k in 1..levels.max(1) {
+            let next = block_max(&levels_built[k - 1], width as usize, 1 << (k - 1));
+            levels_built.push(next);
+        }
+        Self {
             origin,
             resolution: res,
             width,
             height,
-            levels: vec![base],
-        };
-        for k in 1..levels.max(1) {
-            let step = 1i32 << (k - 1);
-            let prev = &grid.levels[k - 1];
-            let at = |x: i32, y: i32| -> u8 {
-                if x < width && y < height {
-                    prev[(y * width + x) as usize]
-                } else {
-                    0
-                }
-            };
-            let mut next = vec![0u8; prev.len()];
-            for y in 0..height {
-                for x in 0..width {
-                    next[(y * width + x) as usize] = at(x, y)
-                        .max(at(x + step, y))
-                        .max(at(x, y + step))
-                        .max(at(x + step, y + step));
-                }
-            }
-            grid.levels.push(next);
+            levels: levels_built,
         }
-        grid
     }
 
     /// The largest fine value in the block `[x, x + 2^level) × [y, y + 2^level)`, or a bound
@@ -234,7 +227,7 @@ impl LookupGrid {
         let cos_step = 1.0 - self.resolution * self.resolution / (2.0 * reach * reach);
         let heading_step = cos_step.clamp(-1.0, 1.0).acos().max(1e-4);
         let headings = (window.heading_rad / heading_step).ceil() as i32;
-        let cells = (-headings..=headings)
+        let cells: Vec<Vec<(i32, i32)>> = (-headings..=headings)
             .map(|h| {
                 let rotation = Pose2::new(guess.x, guess.y, guess.theta + h as f32 * heading_step);
                 scored
@@ -249,15 +242,34 @@ impl LookupGrid {
                     .collect()
             })
             .collect();
+        let half = (window.translation_m / self.resolution).ceil() as i32;
+        // Each heading's cells that stay on the grid at every offset of the window first.
+        let on_grid = |(x, y): (i32, i32)| {
+            x.checked_sub(half).is_some_and(|lo| lo >= 0)
+                && x.checked_add(half).is_some_and(|hi| hi < self.width)
+                && y.checked_sub(half).is_some_and(|lo| lo >= 0)
+                && y.checked_add(half).is_some_and(|hi| hi < self.height)
+        };
+        let (cells, on_grid): (Vec<_>, Vec<_>) = cells
+            .into_iter()
+            .map(|c: Vec<(i32, i32)>| {
+                let (mut inside, outside): (Vec<_>, Vec<_>) =
+                    c.into_iter().partition(|&c| on_grid(c));
+                let count = inside.len();
+                inside.extend(outside);
+                (inside, count)
+            })
+            .unzip();
         let norm = 255.0 * scored.len() as f32;
         let turn_cost = (-headings..=headings)
             .map(|h| (norm * prior.per_rad2 * (h as f32 * heading_step).powi(2)) as u32)
             .collect();
         Some(Layout {
             cells,
+            on_grid,
             headings,
             heading_step,
-            half: (window.translation_m / self.resolution).ceil() as i32,
+            half,
             norm,
             cell_cost: norm * prior.per_m2 * self.resolution * self.resolution,
             turn_cost,
@@ -283,7 +295,8 @@ impl LookupGrid {
                     let cost = layout.cost(heading, ix, iy, top_step);
                     // A block the penalty alone rules out is not scored.
                     let open = (layout.norm as u32).saturating_sub(cost) > threshold;
-                    let score = || self.score(cells, top, ix, iy).saturating_sub(cost);
+                    let on_grid = layout.on_grid[heading];
+                    let score = || self.score(cells, on_grid, top, ix, iy).saturating_sub(cost);
                     let bound = if open { score() } else { 0 };
                     if bound > threshold {
                         roots.push(Candidate {
@@ -343,11 +356,24 @@ impl LookupGrid {
             .collect()
     }
 
-    fn score(&self, cells: &[(i32, i32)], level: usize, ix: i32, iy: i32) -> u32 {
-        cells
+    /// The sum of [`Self::value`] over `cells` shifted by (`ix`, `iy`), a translation of the
+    /// layout's window. The first `on_grid` cells stay on the grid at every such translation,
+    /// so they need none of the edge rules and their values are read straight from the level.
+    fn score(&self, cells: &[(i32, i32)], on_grid: usize, level: usize, ix: i32, iy: i32) -> u32 {
+        let (inside, outside) = cells.split_at(on_grid);
+        let values = &self.levels[level];
+        let shift = iy as isize * self.width as isize + ix as isize;
+        let direct: u32 = inside
             .iter()
-            .map(|&(x, y)| self.value(level, x + ix, y + iy) as u32)
-            .sum()
+            .map(|&(x, y)| {
+                values[(y as isize * self.width as isize + x as isize + shift) as usize] as u32
+            })
+            .sum();
+        direct
+            + outside
+                .iter()
+                .map(|&(x, y)| self.value(level, x + ix, y + iy) as u32)
+                .sum::<u32>()
     }
 }
 
@@ -364,6 +390,9 @@ pub struct Rival {
 /// The scored points' cells per heading, and what turns a candidate back into a pose.
 struct Layout {
     cells: Vec<Vec<(i32, i32)>>,
+    /// How many of each heading's cells, at its start, stay on the grid at every translation
+    /// of the window.
+    on_grid: Vec<usize>,
     headings: i32,
     heading_step: f32,
     half: i32,
@@ -456,7 +485,12 @@ impl Search<'_> {
         }
         let level = c.level - 1;
         let step = 1i32 << level;
-        let mut children: Vec<Candidate> = Vec::with_capacity(4);
+        let (cells, on_grid) = (
+            &self.layout.cells[c.heading],
+            self.layout.on_grid[c.heading],
+        );
+        let mut children = [c; 4];
+        let mut count = 0;
         for (dx, dy) in [(0, 0), (step, 0), (0, step), (step, step)] {
             let (ix, iy) = (c.ix + dx, c.iy + dy);
             if ix > self.layout.half || iy > self.layout.half {
@@ -465,21 +499,48 @@ impl Search<'_> {
             let cost = self.layout.cost(c.heading, ix, iy, step);
             let bound = self
                 .grid
-                .score(&self.layout.cells[c.heading], level, ix, iy)
+                .score(cells, on_grid, level, ix, iy)
                 .saturating_sub(cost);
-            children.push(Candidate {
+            children[count] = Candidate {
                 heading: c.heading,
                 ix,
                 iy,
                 level,
                 bound,
-            });
+            };
+            count += 1;
         }
+        let children = &mut children[..count];
         children.sort_by_key(|c| std::cmp::Reverse(c.bound));
-        for child in children {
+        for &child in children.iter() {
             self.expand(child);
         }
     }
+}
+
+/// The next pyramid level of `prev` (rows of `width` cells): each cell the largest of itself
+/// and the cells `step` to its right, above it and both, cells past the far edges counting as
+/// 0. A maximum splits into one along rows and one along columns, and each runs over whole
+/// rows at once.
+fn block_max(prev: &[u8], width: usize, step: usize) -> Vec<u8> {
+    let mut next = prev.to_vec();
+    // Along rows: cell x takes the larger of itself and cell x + step of the same row.
+    if step < width {
+        for (row, old) in next.chunks_exact_mut(width).zip(prev.chunks_exact(width)) {
+            for (cell, &right) in row.iter_mut().zip(&old[step..]) {
+                *cell = (*cell).max(right);
+            }
+        }
+    }
+    // Along columns: row y takes the larger of itself and row y + step (not yet changed).
+    let rows = next.len() / width.max(1);
+    for y in 0..rows.saturating_sub(step) {
+        let (low, high) = next.split_at_mut((y + step) * width);
+        for (cell, &up) in low[y * width..].iter_mut().zip(&high[..width]) {
+            *cell = (*cell).max(up);
+        }
+    }
+    next
 }
 
 /// Likelihood of a point at each offset of the stamping kernel, 0 to 255.
@@ -550,6 +611,103 @@ mod tests {
             heading_rad: 0.35,
         };
         (CorrelativeConfig::default(), reference, current, window)
+    }
+
+    /// The grid by its definition, cell by cell: each point's kernel stamped where it lands on
+    /// the grid, and each level the largest of four cells of the one below (0 past the edges).
+    fn levels_by_definition(grid: &LookupGrid, points: &[Vec2], sigma_m: f32) -> Vec<Vec<u8>> {
+        let (w, h) = (grid.width, grid.height);
+        let kernel = gaussian_kernel(grid.resolution, sigma_m);
+        let mut base = vec![0u8; (w * h) as usize];
+        for p in points.iter().filter(|p| p.is_finite()) {
+            let cx = ((p.x - grid.origin.x) / grid.resolution) as i32;
+            let cy = ((p.y - grid.origin.y) / grid.resolution) as i32;
+            for dy in -KERNEL_CELLS..=KERNEL_CELLS {
+                for dx in -KERNEL_CELLS..=KERNEL_CELLS {
+                    let (x, y) = (cx + dx, cy + dy);
+                    if (0..w).contains(&x) && (0..h).contains(&y) {
+                        let k = (dy + KERNEL_CELLS) * (2 * KERNEL_CELLS + 1) + dx + KERNEL_CELLS;
+                        let cell = &mut base[(y * w + x) as usize];
+                        *cell = (*cell).max(kernel[k as usize]);
+                    }
+                }
+            }
+        }
+        let mut levels = vec![base];
+        for k in 1..grid.levels.len() {
+            let step = 1 << (k - 1);
+            let prev = &levels[k - 1];
+            let at = |x: i32, y: i32| {
+                if x < w && y < h {
+                    prev[(y * w + x) as usize]
+                } else {
+                    0
+                }
+            };
+            let mut next = vec![0u8; prev.len()];
+            for y in 0..h {
+                for x in 0..w {
+                    next[(y * w + x) as usize] = at(x, y)
+                        .max(at(x + step, y))
+                        .max(at(x, y + step))
+                        .max(at(x + step, y + step));
+                }
+            }
+            levels.push(next);
+        }
+        levels
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// Every level holds the values of the definition, for points at the grid's edges (no
+        /// margin), grids narrower than a block and a single point.
+        #[test]
+        fn the_pyramid_holds_the_values_of_its_definition(
+            points in proptest::collection::vec((-2.0f32..2.0, -1.0f32..1.5), 1..60),
+            margin in proptest::prop_oneof![proptest::strategy::Just(0.0f32), 0.0f32..0.7],
+            levels in 1usize..8,
+            sigma in 0.05f32..0.3,
+        ) {
+            let cfg = CorrelativeConfig { sigma_m: sigma, ..CorrelativeConfig::default() };
+            let points: Vec<Vec2> = points.into_iter().map(|(x, y)| Vec2::new(x, y)).collect();
+            let grid = LookupGrid::new(&points, margin, &cfg, levels);
+            proptest::prop_assert_eq!(grid.levels.len(), levels);
+            proptest::prop_assert_eq!(&grid.levels, &levels_by_definition(&grid, &points, sigma));
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(32))]
+        /// A score is the sum of every cell's value at each translation of the window and each
+        /// level, for scans that reach past the grid on every side.
+        #[test]
+        fn a_score_is_the_sum_of_its_cells_values(
+            current in proptest::collection::vec((-4.0f32..4.0, -4.0f32..4.0), 1..40),
+            x in -0.5f32..0.5, y in -0.5f32..0.5, t in -0.3f32..0.3,
+            translation_m in 0.0f32..1.2, levels in 1usize..6,
+        ) {
+            let cfg = CorrelativeConfig::default();
+            let grid = LookupGrid::new(&room(), 0.3, &cfg, levels);
+            let current: Vec<Vec2> = current.into_iter().map(|(x, y)| Vec2::new(x, y)).collect();
+            let window = Window { translation_m, heading_rad: 0.1 };
+            let prior = MotionPrior::default();
+            let layout = grid.layout(&current, Pose2::new(x, y, t), window, prior, &cfg).unwrap();
+            let half = layout.half;
+            for (cells, &on_grid) in layout.cells.iter().zip(&layout.on_grid) {
+                for level in 0..levels {
+                    for ix in (-half..=half).step_by(3) {
+                        for iy in (-half..=half).step_by(2) {
+                            let sum: u32 = cells
+                                .iter()
+                                .map(|&(x, y)| u32::from(grid.value(level, x + ix, y + iy)))
+                                .sum();
+                            proptest::prop_assert_eq!(grid.score(cells, on_grid, level, ix, iy), sum);
+                        }
+                    }
+                }
+            }
+        }
     }
 
     proptest::proptest! {
