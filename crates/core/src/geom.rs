@@ -95,6 +95,24 @@ impl core::ops::Mul<f32> for Vec2 {
     }
 }
 
+/// A [`Pose2`] ready to map points ([`Pose2::placement`]): [`Pose2::transform`]'s results
+/// without its two trigonometric calls a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    sin: f32,
+    cos: f32,
+    x: f32,
+    y: f32,
+}
+
+impl Placement {
+    /// Maps a point from the pose's frame into the parent frame.
+    pub fn transform(self, p: Vec2) -> Vec2 {
+        let (s, c) = (self.sin, self.cos);
+        Vec2::new(c * p.x - s * p.y + self.x, s * p.x + c * p.y + self.y)
+    }
+}
+
 /// A rigid motion in the plane: rotate by `theta`, then translate by (x, y).
 ///
 /// Used both as a pose (the body frame expressed in the world frame) and as the relative
@@ -131,8 +149,17 @@ impl Pose2 {
 
     /// Maps a point from this pose's frame into the parent frame.
     pub fn transform(self, p: Vec2) -> Vec2 {
-        let (s, c) = (sinf(self.theta), cosf(self.theta));
-        Vec2::new(c * p.x - s * p.y + self.x, s * p.x + c * p.y + self.y)
+        self.placement().transform(p)
+    }
+
+    /// The pose with its sine and cosine worked out once, to map many points.
+    pub fn placement(self) -> Placement {
+        Placement {
+            sin: sinf(self.theta),
+            cos: cosf(self.theta),
+            x: self.x,
+            y: self.y,
+        }
     }
 
     /// Rotates a direction into the parent frame (no translation).

@@ -243,7 +243,8 @@ impl LookupGrid {
         let headings = (window.heading_rad / heading_step).ceil() as i32;
         let cells: Vec<Vec<(i32, i32)>> = (-headings..=headings)
             .map(|h| {
-                let rotation = Pose2::new(guess.x, guess.y, guess.theta + h as f32 * heading_step);
+                let rotation =
+                    Pose2::new(guess.x, guess.y, guess.theta + h as f32 * heading_step).placement();
                 scored
                     .iter()
                     .map(|&p| {
@@ -345,6 +346,7 @@ impl LookupGrid {
         if scored.is_empty() {
             return 0.0;
         }
+        let pose = pose.placement();
         let sum: u32 = scored
             .iter()
             .map(|&p| {

@@ -225,7 +225,7 @@ impl<const N: usize> LoopCloser<N> {
         let last = (from + neighbours).min(to.saturating_sub(1));
         let mut reference: Vec<Vec2> = Vec::new();
         for k in (first..=last).filter(|&k| keyframes[k].has_scan()) {
-            let into_from = poses[from].between(poses[k]);
+            let into_from = poses[from].between(poses[k]).placement();
             reference.extend(keyframes[k].points().map(|p| into_from.transform(p)));
         }
         // Only points the search scores (within its range) and reference points they can land
@@ -236,7 +236,8 @@ impl<const N: usize> LoopCloser<N> {
             .points()
             .filter(|p| p.norm() <= range)
             .collect();
-        let (lo, hi) = bounds(current.iter().map(|&p| guess.transform(p)));
+        let at_guess = guess.placement();
+        let (lo, hi) = bounds(current.iter().map(|&p| at_guess.transform(p)));
         let travelled = (keyframes[to].path_m - keyframes[from].path_m).abs();
         let window = Window {
             translation_m: (cfg.window_floor_m + cfg.drift_per_m * travelled).min(cfg.window_max_m),
@@ -286,7 +287,7 @@ fn render_view<const N: usize>(points: &[Vec2], viewpoint: Pose2, view: &mut Sca
     let bins = VIEW_BINS.min(N);
     let width = core::f32::consts::TAU / bins as f32;
     let mut nearest: Vec<Option<Beam>> = vec![None; bins];
-    let into_view = viewpoint.inverse();
+    let into_view = viewpoint.inverse().placement();
     for &p in points {
         let local = into_view.transform(p);
         let (range, bearing) = (local.norm(), local.y.atan2(local.x));
