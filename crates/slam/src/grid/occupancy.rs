@@ -3,7 +3,7 @@
 use super::frame::{Cell, CellRect, GridFrame};
 use super::prepared::PreparedScan;
 use super::see_through::Candidates;
-use super::tiles::{cell_at, Tiles, TILE};
+use super::tiles::{cell_at, offset_in_tile, Tiles, TILE};
 use super::{CellState, GridConfig, GridError};
 use plumbline_core::geom::{Pose2, Vec2};
 use plumbline_core::scan::Beam;
@@ -292,6 +292,28 @@ impl OccupancyGrid {
             CellState::Unknown
         } else {
             state
+        }
+    }
+
+    /// Appends the states of cells `i0..=i1` of row `j` to `out`, as [`Self::state`] gives
+    /// them, looking each tile up once rather than once a cell.
+    pub fn row_states(&self, j: i32, i0: i32, i1: i32, out: &mut Vec<CellState>) {
+        let mut i = i0;
+        while i <= i1 {
+            let cell = Cell::new(i, j);
+            // The cells of this row up to the tile's right edge (or `i1`).
+            let end = (i | (TILE as i32 - 1)).min(i1);
+            match self.tiles.tile_at(cell) {
+                None => out.extend((i..=end).map(|_| CellState::Unknown)),
+                Some(tile) => {
+                    let row = offset_in_tile(Cell::new(0, j));
+                    out.extend((i..=end).map(|i| {
+                        let k = row + (i & (TILE as i32 - 1)) as usize;
+                        self.state_of(Cell::new(i, j), tile.hits[k], tile.misses[k])
+                    }));
+                }
+            }
+            i = end + 1;
         }
     }
 

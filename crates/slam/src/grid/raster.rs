@@ -40,7 +40,7 @@ impl Raster {
         let mut states = Vec::with_capacity(width * height);
         for row in 0..height {
             let j = rect.max.j - row as i32;
-            states.extend((rect.min.i..=rect.max.i).map(|i| grid.state(Cell::new(i, j))));
+            grid.row_states(j, rect.min.i, rect.max.i, &mut states);
         }
         Ok(Some(Raster {
             width,
@@ -129,6 +129,34 @@ mod tests {
         assert_eq!(r.pixel_of(Vec2::new(0.52, 0.31)), (10, 0));
         let empty = OccupancyGrid::new(GridConfig::default()).unwrap();
         assert_eq!(Raster::from_grid(&empty).unwrap(), None);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+        /// Every pixel shows the state the grid gives its cell, over maps of several tiles with
+        /// unallocated tiles between the ones beams reached.
+        #[test]
+        fn every_pixel_shows_its_cells_state(
+            scans in prop::collection::vec(
+                ((-6.0f32..6.0, -6.0f32..6.0), prop::collection::vec((-4.0f32..4.0, -4.0f32..4.0), 1..30)),
+                1..6,
+            ),
+        ) {
+            let mut g = OccupancyGrid::new(GridConfig::default()).unwrap();
+            for ((x, y), hits) in &scans {
+                let mut s = PreparedScan::new();
+                for &(u, v) in hits {
+                    s.push_hit(Vec2::new(u, v));
+                }
+                g.insert(Pose2::new(*x, *y, 0.0), &s).unwrap();
+            }
+            let r = Raster::from_grid(&g).unwrap().unwrap();
+            for row in 0..r.height {
+                for col in 0..r.width {
+                    prop_assert_eq!(r.state(col, row), g.state(r.cell_of_pixel(col, row)));
+                }
+            }
+        }
     }
 
     proptest! {

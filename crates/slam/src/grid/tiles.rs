@@ -57,7 +57,7 @@ fn tile_of(c: Cell) -> (i32, i32) {
     (c.i >> TILE_SHIFT, c.j >> TILE_SHIFT)
 }
 
-fn offset_in_tile(c: Cell) -> usize {
+pub fn offset_in_tile(c: Cell) -> usize {
     (((c.j & TILE_MASK) as usize) << TILE_SHIFT) | (c.i & TILE_MASK) as usize
 }
 
@@ -276,14 +276,19 @@ impl Tiles {
 
     /// (hits, misses) of a cell; (0, 0) where nothing was ever observed.
     pub fn counts(&self, c: Cell) -> (u16, u16) {
-        let (ti, tj) = tile_of(c);
-        match self.slot(ti, tj).and_then(|k| self.slots[k].as_deref()) {
+        match self.tile_at(c) {
             Some(t) => {
                 let k = offset_in_tile(c);
                 (t.hits[k], t.misses[k])
             }
             None => (0, 0),
         }
+    }
+
+    /// The tile holding `c`, `None` where none is allocated.
+    pub fn tile_at(&self, c: Cell) -> Option<&Tile> {
+        let (ti, tj) = tile_of(c);
+        self.slot(ti, tj).and_then(|k| self.slots[k].as_deref())
     }
 
     /// Every allocated tile with the cell of its lower-left corner.
