@@ -182,3 +182,18 @@ fn a_way_home_through_a_gap_only_the_map_has_is_planned_round_and_flown_home() {
     assert!(e.returned_home && e.landed, "{e:?}");
     assert_eq!(e.failsafe, None, "{e:?}");
 }
+
+#[test]
+fn a_home_the_drifted_map_puts_against_a_wall_is_not_landed_at() {
+    // Building seed 69: after 200 s down the long corridors the map frame is 3.5 m off along
+    // the start corridor and its home point 0.25 m from the north wall the vehicle sees. Flown
+    // to, then landed at, that home took the vehicle into the wall at 326 s; the landing spot
+    // now keeps clear of what the scan sees, so the vehicle lands beside it.
+    let (report, _) = explore(shipped("building"), 69, 340.0, Strategy::Frontier);
+    let e = report.score.explore.as_ref().unwrap();
+    let companion = &report.exploration.as_ref().unwrap().companion;
+    assert_eq!(e.collisions, 0, "{e:?}");
+    assert!(e.landed, "{e:?}");
+    assert!(companion.landed_off_home, "{e:?}");
+    assert!(e.min_clearance_m >= 0.5, "{e:?}");
+}

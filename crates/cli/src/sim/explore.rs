@@ -46,6 +46,7 @@ pub fn extend_summary(summary: &mut Value, score: &ExploreScore, exploration: &E
         "path_home_m": c.path_home_m,
         "return_stall_replans": c.stall_replans,
         "return_given_up_s": c.gave_up_s,
+        "landed_off_home": c.landed_off_home,
         "slam_predicted_scans": c.predicted,
         "slam_degenerate_s": c.degenerate_s,
         "map_corrections": c.resets,

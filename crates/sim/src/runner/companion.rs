@@ -13,11 +13,13 @@
 
 use super::fix_covariance::fix_covariance;
 use super::ground::GroundStation;
+use super::landing_spot::landing_spot;
 use super::onboard_link::{
     CompanionComputer, FlightLog, OnboardLink, WithCompanion, LARGE_SCAN_BEAMS, XV11_BEAMS,
 };
 use super::progress::{ProgressWatch, Verdict};
 use super::{Pilot, SetupError};
+use plumbline_core::flight::mission::MissionConfig;
 use plumbline_core::geom::{normalize_angle, Pose2, Vec2};
 use plumbline_core::guidance::config::GuidanceConfig;
 use plumbline_core::guidance::step::{Guidance, GuidanceMode};
@@ -114,6 +116,9 @@ pub struct CompanionLog {
     pub stall_replans: usize,
     /// When the way home was given up for want of progress, s.
     pub gave_up_s: Option<f64>,
+    /// The landing was asked for off the home point: home was too near what the scan saw
+    /// (a drifted map frame puts it against a wall) or not safely reachable.
+    pub landed_off_home: bool,
 }
 
 /// SLAM, explorer and guidance of one flight.
@@ -298,13 +303,36 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
         }
         msgs.path_home_m = path.as_ref().map(|p| p.length_m);
         if (home - p).norm() <= HOME_APPROACH_M {
-            msgs.setpoint = Some(CompanionSetpoint {
-                t_s,
-                target: SetpointTarget::Position {
-                    position_m: [home.x, home.y],
-                    yaw_rad: pose.theta,
-                },
-            });
+            // The autopilot lands anywhere within its home tolerance of where it is sent, so
+            // the spot keeps r_min plus that tolerance from what the scan sees.
+            let g = self.guidance.config();
+            let tolerance_m = MissionConfig::default().home_tolerance_m;
+            let spot = landing_spot(
+                scan,
+                pose,
+                home,
+                g.r_min_m() + tolerance_m,
+                g.vehicle_radius_m,
+                HOME_APPROACH_M,
+            );
+            match spot {
+                Some(spot) if spot == home || (spot - p).norm() > tolerance_m => {
+                    msgs.setpoint = Some(CompanionSetpoint {
+                        t_s,
+                        target: SetpointTarget::Position {
+                            position_m: [spot.x, spot.y],
+                            yaw_rad: pose.theta,
+                        },
+                    });
+                }
+                // At a spot moved off home (the autopilot would not call it home), or with no
+                // safe spot near home: down here, where the field has kept the vehicle clear.
+                _ => {
+                    self.log.borrow_mut().landed_off_home = true;
+                    self.phase = Phase::LandingHere;
+                    msgs.command = Some(MissionCommand::LandHere);
+                }
+            }
             return;
         }
         let target: Vec2 = path.map_or(home, |path| {

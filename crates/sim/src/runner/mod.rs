@@ -12,6 +12,7 @@
 
 mod config;
 mod fix_covariance;
+mod landing_spot;
 pub mod ground;
 mod lockstep;
 pub mod companion;
