@@ -640,7 +640,8 @@ mod tests {
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
         /// With a motion prior too, pruning never loses the best penalised pose, and the score
-        /// returned is the pose's own fit.
+        /// returned is the pose's own fit. Poses whose penalised scores tie may differ: which
+        /// of them wins depends on the order blocks are opened in.
         #[test]
         fn branch_and_bound_with_a_prior_equals_exhaustive_search(
             x in -0.5f32..0.5, y in -0.5f32..0.5, t in -0.3f32..0.3, levels in 2usize..7,
@@ -649,13 +650,16 @@ mod tests {
             let (cfg, reference, current, window) = room_seen_from(Pose2::new(x, y, t));
             let prior = MotionPrior { per_m2, per_rad2 };
             let guess = Pose2::new(0.1, -0.1, 0.05);
-            let pruned = LookupGrid::new(&reference, 0.2, &cfg, levels)
-                .search_near(&current, guess, window, prior, 0.0, &cfg);
-            let exhaustive = LookupGrid::new(&reference, 0.2, &cfg, 1)
-                .search_near(&current, guess, window, prior, 0.0, &cfg);
-            proptest::prop_assert_eq!(pruned, exhaustive);
+            let pruned_grid = LookupGrid::new(&reference, 0.2, &cfg, levels);
             let grid = LookupGrid::new(&reference, 0.2, &cfg, 1);
-            let found = pruned.unwrap();
+            let best_penalised = |grid: &LookupGrid| {
+                let layout = grid.layout(&current, guess, window, prior, &cfg).unwrap();
+                grid.run(&layout, 0, None).map(|c| c.bound)
+            };
+            proptest::prop_assert_eq!(best_penalised(&pruned_grid), best_penalised(&grid));
+            let found = pruned_grid
+                .search_near(&current, guess, window, prior, 0.0, &cfg)
+                .unwrap();
             let own = grid.score_pose(&current, found.pose, &cfg);
             proptest::prop_assert!((own - found.score).abs() < 1e-3, "{own} vs {found:?}");
         }
