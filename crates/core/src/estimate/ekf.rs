@@ -88,6 +88,14 @@ pub struct EkfConfig {
     /// measurement is taken. Without this, a filter that has drifted (an unsensed touchdown
     /// shock, a long lidar outage) would reject every correction forever.
     pub reset_after_rejections: u32,
+    /// Scan matches reopen the filter on time as well as on count: once they have been
+    /// refused for this long (s, from the run's first refusal), the horizontal states are
+    /// reopened and the refused match is used at once. The run must end within the
+    /// supervisor's lidar timeout (1 s from the last accepted match): a filter refusing good
+    /// matches for longer raises "lidar lost", holds on the IMU and lands before the matcher
+    /// can pull it back, and ten refusals of the XV-11's 4 Hz revolutions take 2.5 s. 0.5 s is
+    /// the third refusal at 4 Hz (0.75 s after the last acceptance), the sixth at 10 Hz.
+    pub scan_reopen_after_s: f32,
     /// One-sigma given to reopened states: horizontal position (m; below
     /// `max_position_std_m`, so a reopened estimate stays flyable), height (m), velocity (m/s)
     /// and yaw (rad). Wide enough that the next measurement passes the gate.
@@ -118,6 +126,7 @@ impl Default for EkfConfig {
             degraded_max_velocity_std_m_s: 0.5,
             degraded_max_position_std_m: 3.0,
             reset_after_rejections: 10,
+            scan_reopen_after_s: 0.5,
             reopen_std: [1.0, 5.0, 1.0, 0.3],
             // Tuned in the simulator with the XV-11 profile (crates/sim/tests/closed_loop.rs).
             scan_covariance_scale: 10.0,
@@ -167,6 +176,15 @@ impl Counters {
     pub fn record_gated(&mut self, outcome: Outcome, limit: u32) -> bool {
         self.record(outcome);
         if self.consecutive_rejected < limit.max(1) {
+            return false;
+        }
+        self.record_gated_now()
+    }
+
+    /// Ends the current run of rejections as a reset (the caller reopens the measured states);
+    /// true when there was a run to end.
+    pub fn record_gated_now(&mut self) -> bool {
+        if self.consecutive_rejected == 0 {
             return false;
         }
         self.consecutive_rejected = 0;

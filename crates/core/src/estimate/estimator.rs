@@ -61,6 +61,8 @@ pub struct Estimator {
     companion: CompanionFrame,
     /// Time predicted since "at rest" was last fused (s).
     since_at_rest_s: f32,
+    /// Stamp of the first scan match of the current run of refusals (s).
+    scan_refused_since_s: Option<f64>,
 }
 
 impl Estimator {
@@ -73,6 +75,7 @@ impl Estimator {
             counters: EstimatorCounters::default(),
             companion: CompanionFrame::default(),
             since_at_rest_s: f32::INFINITY,
+            scan_refused_since_s: None,
         }
     }
 
@@ -155,12 +158,16 @@ impl Estimator {
     }
 
     /// Fuses a scan-matcher result whose pose belongs `latency_s` before now; after a run of
-    /// rejections the horizontal pose and velocity are reopened so the matcher can pull the
-    /// filter back (a pose jump after an outage).
+    /// rejections (`EkfConfig::scan_reopen_after_s` long, or `reset_after_rejections` of them,
+    /// whichever ends first) the horizontal pose and velocity are reopened so the matcher can
+    /// pull the filter back (a pose jump after an outage, an estimate that slid).
     pub fn fuse_scan_match(&mut self, m: &ScanMatchDelta, latency_s: f32) -> Outcome {
-        let outcome = self.ekf.fuse_scan_match(m, latency_s);
-        let limit = self.config.ekf.reset_after_rejections;
-        if self.counters.scan_match.record_gated(outcome, limit) {
+        // The match refers to the reference it may replace: to use it at once after a reopen,
+        // the filter goes back to before it.
+        let before = self.ekf;
+        let mut outcome = self.ekf.fuse_scan_match(m, latency_s);
+        if self.scan_refusals_ran_out(outcome, m.t_s) {
+            self.ekf = before;
             let [sp, _, sv, sy] = self.config.ekf.reopen_std;
             self.ekf.reset_variance(&[
                 (ix::POS, sp * sp),
@@ -169,9 +176,35 @@ impl Estimator {
                 (ix::VEL + 1, sv * sv),
                 (ix::YAW, sy * sy),
             ]);
+            outcome = self.ekf.fuse_scan_match(m, latency_s);
+            self.counters.scan_match.record(outcome);
         }
         self.feed_back_tilt();
         outcome
+    }
+
+    /// Records a scan-match outcome stamped `t_s`; true when it ends a run of refusals long
+    /// enough to reopen the filter (the run is then counted as a reset). The count backs the
+    /// time up for stamps that do not advance.
+    fn scan_refusals_ran_out(&mut self, outcome: Outcome, t_s: f64) -> bool {
+        let c = &self.config.ekf;
+        let counted = self
+            .counters
+            .scan_match
+            .record_gated(outcome, c.reset_after_rejections);
+        let timed = match outcome {
+            Outcome::Accepted => false,
+            Outcome::Rejected => {
+                let first = *self.scan_refused_since_s.get_or_insert(t_s);
+                (t_s - first) as f32 >= c.scan_reopen_after_s
+                    && self.counters.scan_match.record_gated_now()
+            }
+            Outcome::Invalid => return false,
+        };
+        if outcome == Outcome::Accepted || counted || timed {
+            self.scan_refused_since_s = None;
+        }
+        counted || timed
     }
 
     /// Fuses a companion pose fix that arrived `age_s` after its time ([`super::pose_fix`]).

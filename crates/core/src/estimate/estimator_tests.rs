@@ -164,6 +164,55 @@ fn a_run_of_sonar_rejections_reopens_the_height() {
 }
 
 #[test]
+fn refused_scan_matches_reopen_the_filter_within_the_lidar_timeout() {
+    use crate::flight::supervisor::SupervisorConfig;
+    let mut rng = Gauss(7);
+    let mut est = Estimator::new(EstimatorConfig::default());
+    let level = level_at_rest();
+    let origin = Pose2::new(0.0, 0.0, 0.0);
+    let reference = ScanMatchDelta {
+        status: ScanMatchStatus::ReferenceOnly,
+        ..scan(&mut rng, 0.0, origin, origin)
+    };
+    assert_eq!(est.fuse_scan_match(&reference, 0.0), Outcome::Accepted);
+    // The filter believes it hovers at the origin; every revolution (4 Hz, the XV-11's) says
+    // the vehicle is 1 m along x: far outside the gate, and right.
+    let moved = Pose2::new(1.0, 0.0, 0.0);
+    let period_s = 0.25;
+    let mut accepted_at_s = None;
+    for k in 1..=8 {
+        for _ in 0..125 {
+            assert!(est.predict(&level, 0.002));
+        }
+        let t_s = k as f64 * period_s;
+        let m = ScanMatchDelta {
+            becomes_reference: false,
+            ..scan(&mut rng, t_s, moved, origin)
+        };
+        if est.fuse_scan_match(&m, 0.0) == Outcome::Accepted {
+            accepted_at_s = Some(t_s);
+            break;
+        }
+    }
+    // Refused at 0.25 and 0.5 s; the refusal at 0.75 s ends a run of 0.5 s, the filter is
+    // reopened and that match used at once: before the supervisor would call the lidar lost.
+    let accepted_at_s = accepted_at_s.expect("never reopened");
+    let c = est.config.ekf;
+    assert!((accepted_at_s - 0.25 - f64::from(c.scan_reopen_after_s)).abs() < 1e-9);
+    assert!((accepted_at_s as f32) < SupervisorConfig::default().lidar_timeout_s);
+    let counted = est.counters().scan_match;
+    assert_eq!(
+        (counted.rejected, counted.resets, counted.accepted),
+        (3, 1, 2)
+    );
+    assert!(
+        (est.state().position_m[0] - 1.0).abs() < 0.05,
+        "{:?}",
+        est.state()
+    );
+}
+
+#[test]
 fn at_rest_is_fused_once_a_period() {
     let mut est = Estimator::new(EstimatorConfig::default());
     let level = level_at_rest();
