@@ -420,35 +420,50 @@ fn a_corridor_across_the_nose_is_still_flown_along() {
 }
 
 #[test]
-fn a_wall_that_vanishes_from_the_scan_is_remembered_for_a_moment() {
+fn a_wall_that_vanishes_from_the_scan_is_remembered_until_the_vehicle_moves_on() {
     // A wall 0.45 m to the right (inside r_min), seen once; the next scans lose it, as a thin
     // wall's end seen edge-on is lost, while the waypoint lies straight through it.
-    let pose = Pose2::new(0.0, 0.0, 0.0);
+    let seen_from = Pose2::new(0.0, 0.0, 0.0);
     let far = wall((-5.0, 3.0), (5.0, 3.0));
-    let at = |world: &[Seg], stamp_s: f64| {
+    let at = |world: &[Seg], pose: Pose2, stamp_s: f64| {
         let mut s = look(world, pose);
         s.stamp_s = stamp_s;
         s
     };
-    let seen = at(&[far, wall((-5.0, -0.45), (5.0, -0.45))], 10.0);
+    let seen = at(&[far, wall((-5.0, -0.45), (5.0, -0.45))], seen_from, 10.0);
     let through = GuidanceMode::TowardWaypoint {
         world_m: [0.0, -3.0],
     };
-    let fly = |memory_s: f32, lost_at_s: f64| {
+    // The velocity toward the lost wall (world -y) a scan at `lost_at_s` from `x` m along it
+    // asks for.
+    let fly = |memory_s: f32, hold_s: f32, x: f32, lost_at_s: f64| {
         let cfg = GuidanceConfig {
             obstacle_memory_s: memory_s,
+            obstacle_hold_s: hold_s,
             ..GuidanceConfig::default()
         };
         let mut g = Guidance::<64>::new(cfg).unwrap();
-        g.step(&seen, pose, through);
-        g.step(&at(&[far], lost_at_s), pose, through)
+        g.step(&seen, seen_from, through);
+        let pose = Pose2::new(x, 0.0, 0.0);
+        g.step(&at(&[far], pose, lost_at_s), pose, through)
             .velocity_world_m_s[1]
     };
-    // Remembered: no approach at all (the wall is inside r_min).
-    assert!(fly(1.0, 10.2) >= -1e-4, "{}", fly(1.0, 10.2));
-    // Forgotten after the memory's second, or with no memory: straight on at cruise speed.
-    assert!((fly(1.0, 11.3) + 0.4).abs() < 1e-3, "{}", fly(1.0, 11.3));
-    assert!((fly(0.0, 10.2) + 0.4).abs() < 1e-3, "{}", fly(0.0, 10.2));
+    let cruise = GuidanceConfig::default().cruise_speed_m_s;
+    let toward = |v: f32| -v;
+    // Remembered: no approach at all (the wall is inside r_min)...
+    assert!(toward(fly(1.0, 10.0, 0.0, 10.2)) <= 1e-4);
+    // ...and after the memory's second too, while the vehicle has stayed where it saw it
+    // (lingering in a doorway does not pass the jamb)...
+    assert!(toward(fly(1.0, 10.0, 0.0, 13.0)) <= 1e-4);
+    assert!(toward(fly(1.0, 10.0, 0.3, 13.0)) <= 1e-4);
+    // ...but not once it has moved on by more than its stopping distance (0.5 m; the waypoint
+    // then lies a little behind, so not all of the cruise speed is toward it), nor after the
+    // hold.
+    assert!(toward(fly(1.0, 10.0, 0.8, 13.0)) > 0.9 * cruise);
+    assert!((toward(fly(1.0, 10.0, 0.0, 20.5)) - cruise).abs() < 1e-3);
+    // Within the memory's second it counts wherever the vehicle is; with no memory, never.
+    assert!(toward(fly(1.0, 10.0, 0.8, 10.2)) <= 1e-4);
+    assert!((toward(fly(0.0, 0.0, 0.0, 10.2)) - cruise).abs() < 1e-3);
     // A clock that runs backwards starts the memory afresh.
-    assert!((fly(1.0, 9.0) + 0.4).abs() < 1e-3, "{}", fly(1.0, 9.0));
+    assert!((toward(fly(1.0, 10.0, 0.0, 9.0)) - cruise).abs() < 1e-3);
 }

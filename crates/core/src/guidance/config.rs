@@ -48,6 +48,13 @@ pub struct GuidanceConfig {
     /// five revolutions of a 5 Hz lidar, long enough to pass a wall end that vanishes when seen
     /// edge-on, short enough that estimate drift and walking people leave no lasting ghosts.
     pub obstacle_memory_s: f32,
+    /// How long a remembered hit is kept while the vehicle stays within its stopping distance
+    /// (`max_speed_m_s / approach_rate_1_s`) of where it last saw it, s (at most
+    /// `obstacle_memory_s` has no effect). Default 10 s: a vehicle that lingers in a doorway
+    /// for seconds and then turns along the wall still sees the jamb that vanished edge-on,
+    /// while where a walking person stood stops counting once the vehicle has moved on, and
+    /// after this long even where it has not.
+    pub obstacle_hold_s: f32,
     /// Slowest closing speed of a surface that is taken as a mover to sidestep, m/s. Default
     /// 0.25 m/s: well above what estimate jitter and range noise make a wall appear to move
     /// between revolutions (a few cm a revolution, averaged over five beams), under a slow walk.
@@ -100,6 +107,7 @@ impl Default for GuidanceConfig {
             waypoint_gain_1_s: 1.0,
             approach_rate_1_s: 1.0,
             obstacle_memory_s: 1.0,
+            obstacle_hold_s: 10.0,
             mover_min_closing_m_s: 0.25,
             mover_max_speed_m_s: 2.0,
             evade_horizon_s: 3.0,
@@ -142,7 +150,7 @@ impl GuidanceConfig {
     /// Checks every field; the first unusable one is returned.
     pub fn validate(&self) -> Result<(), GuidanceConfigError> {
         let positive = "finite and greater than 0";
-        let checks: [(&'static str, f32, bool, &'static str); 23] = [
+        let checks: [(&'static str, f32, bool, &'static str); 24] = [
             (
                 "vehicle_radius_m",
                 self.vehicle_radius_m,
@@ -208,6 +216,12 @@ impl GuidanceConfig {
                 "obstacle_memory_s",
                 self.obstacle_memory_s,
                 is_non_neg(self.obstacle_memory_s),
+                "finite and at least 0",
+            ),
+            (
+                "obstacle_hold_s",
+                self.obstacle_hold_s,
+                is_non_neg(self.obstacle_hold_s),
                 "finite and at least 0",
             ),
             (
@@ -323,6 +337,7 @@ mod tests {
         assert_eq!(bad(|c| c.min_segment_points = 1), "min_segment_points");
         assert_eq!(bad(|c| c.rule_sweep_rad = 7.0), "rule_sweep_rad");
         assert_eq!(bad(|c| c.obstacle_memory_s = -1.0), "obstacle_memory_s");
+        assert_eq!(bad(|c| c.obstacle_hold_s = f32::NAN), "obstacle_hold_s");
         assert_eq!(
             bad(|c| c.mover_min_closing_m_s = 0.0),
             "mover_min_closing_m_s"

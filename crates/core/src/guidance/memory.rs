@@ -1,32 +1,59 @@
-//! Hits near the vehicle remembered for a moment in the world frame, so the guard still sees a
-//! wall the lidar has stopped seeing: a thin wall's end approached edge-on returns nothing
-//! (beams meeting it at a grazing angle are lost), though it was in plain view a second before.
+//! Hits near the vehicle remembered in the world frame, so the guard still sees a wall the
+//! lidar has stopped seeing: a thin wall's end approached edge-on returns nothing (beams
+//! meeting it at a grazing angle are lost), though it was in plain view a moment before.
+//!
+//! How long: a hit is kept `obstacle_memory_s` after it was last seen, and longer (up to
+//! `obstacle_hold_s`) while the vehicle stays within its stopping distance
+//! (`max_speed / approach_rate`) of where it last saw it. A vehicle that lingers in a doorway
+//! and then turns along the wall has not passed the jamb it can no longer see, and a clock
+//! alone forgot it; the guard never lets the vehicle close more than that distance on a
+//! remembered hit (from the guard's reach down to `r_min`), so approaching one cannot make
+//! the vehicle forget it, while flying on past it does.
+//!
+//! Each place is stored once (hits within [`MERGE_M`] of a remembered one refresh it), so the
+//! walls round a vehicle that hovers do not crowd out the jamb it saw a few revolutions ago;
+//! when the memory is full, the hit seen longest ago gives way.
 
 use super::sweep::Sweep;
 use crate::geom::{Pose2, Vec2};
 
-/// Points kept (older ones are overwritten first): about two revolutions of the hits within
-/// a metre of the vehicle in a doorway.
-pub const REMEMBERED_HITS: usize = 256;
+/// Places kept: a metre's reach round a vehicle in a doorway holds about 5 m of wall, 100
+/// places [`MERGE_M`] apart.
+pub const REMEMBERED_HITS: usize = 192;
 
-/// A ring of recent near hits, world frame, with the time each was seen.
+/// Hits closer than this to a remembered one are the same place, m: the range noise of a
+/// cheap lidar, well under the guard's margin.
+pub const MERGE_M: f32 = 0.05;
+
+/// Remembered places, world frame: where each hit was, when it was last seen and where the
+/// vehicle was then.
 #[derive(Clone, Debug)]
 pub struct NearMemory {
     world_m: [Vec2; REMEMBERED_HITS],
+    seen_from_m: [Vec2; REMEMBERED_HITS],
     seen_s: [f64; REMEMBERED_HITS],
     len: usize,
-    next: usize,
 }
 
 impl Default for NearMemory {
     fn default() -> Self {
         Self {
             world_m: [Vec2::ZERO; REMEMBERED_HITS],
+            seen_from_m: [Vec2::ZERO; REMEMBERED_HITS],
             seen_s: [0.0; REMEMBERED_HITS],
             len: 0,
-            next: 0,
         }
     }
+}
+
+/// How long remembered hits count (see the module's documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Recall {
+    /// Every hit counts this long after it was last seen, s.
+    pub memory_s: f32,
+    /// A hit counts this long while the vehicle is within `hold_m` of where it last saw it, s.
+    pub hold_s: f32,
+    pub hold_m: f32,
 }
 
 impl NearMemory {
@@ -45,32 +72,53 @@ impl NearMemory {
             .fold(f64::NEG_INFINITY, f64::max);
         if !stamp_s.is_finite() || stamp_s < newest {
             self.len = 0;
-            self.next = 0;
         }
         if !stamp_s.is_finite() {
             return;
         }
+        let from = pose.translation();
         for pos in (0..sweep.len()).filter(|&p| sweep.is_usable(p) && sweep.range_m(p) < within_m) {
-            self.world_m[self.next] = pose.transform(sweep.point(pos));
-            self.seen_s[self.next] = stamp_s;
-            self.next = (self.next + 1) % REMEMBERED_HITS;
-            self.len = (self.len + 1).min(REMEMBERED_HITS);
+            let p = pose.transform(sweep.point(pos));
+            let known = self.world_m[..self.len]
+                .iter()
+                .position(|&q| (q - p).norm_squared() < MERGE_M * MERGE_M);
+            let slot = match known {
+                Some(k) => k,
+                None if self.len < REMEMBERED_HITS => {
+                    self.len += 1;
+                    self.world_m[self.len - 1] = p;
+                    self.len - 1
+                }
+                None => {
+                    let stalest = (0..self.len)
+                        .min_by(|&a, &b| self.seen_s[a].total_cmp(&self.seen_s[b]))
+                        .unwrap_or(0);
+                    self.world_m[stalest] = p;
+                    stalest
+                }
+            };
+            self.seen_s[slot] = stamp_s;
+            self.seen_from_m[slot] = from;
         }
     }
 
-    /// Remembered hits seen before `now_s` and no more than `max_age_s` earlier, as (unit
+    /// Remembered hits last seen before `now_s` that still count (see [`Recall`]), as (unit
     /// direction, range) in the body frame of `pose`.
     pub fn recalled(
         &self,
         pose: Pose2,
         now_s: f64,
-        max_age_s: f32,
+        recall: Recall,
     ) -> impl Iterator<Item = (Vec2, f32)> + '_ {
         let to_body = pose.inverse();
+        let here = pose.translation();
         (0..self.len)
             .filter(move |&i| {
                 let age = now_s - self.seen_s[i];
-                age > 0.0 && age <= f64::from(max_age_s)
+                age > 0.0
+                    && (age <= f64::from(recall.memory_s)
+                        || (age <= f64::from(recall.hold_s)
+                            && (here - self.seen_from_m[i]).norm() <= recall.hold_m))
             })
             .filter_map(move |i| {
                 let p = to_body.transform(self.world_m[i]);

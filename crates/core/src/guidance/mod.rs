@@ -5,7 +5,7 @@
 //! Pure and heap-free: [`Guidance::step`] takes one revolution and the estimated pose and
 //! returns a world-frame velocity and heading plus what the rules decided. It knows nothing of
 //! flight modes; the autopilot or a companion computer calls it once per revolution. Memory:
-//! `size_of::<Guidance<S>>()` (about 15 KB for 64 segments: 4 KB of it the near-hit memory,
+//! `size_of::<Guidance<S>>()` (about 15.5 KB for 64 segments: 4.5 KB of it the near-hit memory,
 //! 3.3 KB the previous revolution's hits by bearing, for finding movers) plus about 9 KB of
 //! stack a step for a 360-beam scan.
 //!
@@ -16,8 +16,9 @@
 //!
 //! Safety: whatever the rules and the field ask, the last stage ([`guard`]) limits the speed
 //! toward every hit to `approach_rate · (r − r_min)`, so no command closes on a wall inside
-//! `r_min`; hits within the guard's reach are remembered for `obstacle_memory_s`, so a wall
-//! end the lidar loses at a grazing angle still counts. A featureless corridor is flown
+//! `r_min`; hits within the guard's reach are remembered for `obstacle_memory_s`, and while
+//! the vehicle stays within its stopping distance of where it saw them for up to
+//! `obstacle_hold_s`, so a wall end the lidar loses at a grazing angle still counts. A featureless corridor is flown
 //! centred, along the wall's direction.
 //!
 //! Degraded input: no usable beam, a non-finite pose or waypoint give a hover (zero velocity,

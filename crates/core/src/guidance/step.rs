@@ -9,7 +9,7 @@ use super::evade::evade;
 use super::field::{field_sum, FieldPart, FieldSum};
 use super::guard::{guard_velocity, Guard};
 use super::heading::{choose_heading, HeadingRule, SideClearance};
-use super::memory::NearMemory;
+use super::memory::{NearMemory, Recall};
 use super::movers::{Mover, Movers};
 use super::prls::WallSegments;
 use super::sweep::Sweep;
@@ -106,7 +106,8 @@ impl<const S: usize> Guidance<S> {
     }
 
     /// One step: `scan` in the body frame, `pose` the estimated world pose of the body. The
-    /// scan's stamp is the clock of the near-hit memory (hits kept `obstacle_memory_s`).
+    /// scan's stamp is the clock of the near-hit memory (hits kept `obstacle_memory_s`, and up to
+    /// `obstacle_hold_s` while the vehicle stays near where it saw them).
     pub fn step<const N: usize>(
         &mut self,
         scan: &Scan<N>,
@@ -153,7 +154,12 @@ impl<const S: usize> Guidance<S> {
         };
         let now = scan.stamp_s;
         let (limited, speed_limited) = limit_speed(wish_body, cfg.max_speed_m_s);
-        let recalled = || self.memory.recalled(pose, now, cfg.obstacle_memory_s);
+        let recall = Recall {
+            memory_s: cfg.obstacle_memory_s,
+            hold_s: cfg.obstacle_hold_s,
+            hold_m: cfg.max_speed_m_s / cfg.approach_rate_1_s,
+        };
+        let recalled = || self.memory.recalled(pose, now, recall);
         // A mover closing in is stepped aside from; walls still bind through the guard.
         let mover = self.movers.closing(&sweep, pose, now, &cfg);
         let limited = match &mover {
