@@ -103,27 +103,43 @@ impl NearMemory {
     }
 
     /// Remembered hits last seen before `now_s` that still count (see [`Recall`]), as (unit
-    /// direction, range) in the body frame of `pose`.
-    pub fn recalled(
-        &self,
-        pose: Pose2,
-        now_s: f64,
-        recall: Recall,
-    ) -> impl Iterator<Item = (Vec2, f32)> + '_ {
+    /// direction, range) in the body frame of `pose`, worked out once: the guard and the
+    /// evasion go over them many times a step.
+    pub fn recalled(&self, pose: Pose2, now_s: f64, recall: Recall) -> Recalled {
         let to_body = pose.inverse();
         let here = pose.translation();
-        (0..self.len)
-            .filter(move |&i| {
-                let age = now_s - self.seen_s[i];
-                age > 0.0
-                    && (age <= f64::from(recall.memory_s)
-                        || (age <= f64::from(recall.hold_s)
-                            && (here - self.seen_from_m[i]).norm() <= recall.hold_m))
-            })
-            .filter_map(move |i| {
-                let p = to_body.transform(self.world_m[i]);
-                let r = p.norm();
-                (r > 0.0).then(|| (p * (1.0 / r), r))
-            })
+        let mut out = Recalled {
+            hits: [(Vec2::ZERO, 0.0); REMEMBERED_HITS],
+            len: 0,
+        };
+        for i in 0..self.len {
+            let age = now_s - self.seen_s[i];
+            let counts = age > 0.0
+                && (age <= f64::from(recall.memory_s)
+                    || (age <= f64::from(recall.hold_s)
+                        && (here - self.seen_from_m[i]).norm() <= recall.hold_m));
+            if !counts {
+                continue;
+            }
+            let p = to_body.transform(self.world_m[i]);
+            let r = p.norm();
+            if r > 0.0 {
+                out.hits[out.len] = (p * (1.0 / r), r);
+                out.len += 1;
+            }
+        }
+        out
+    }
+}
+
+/// The remembered hits that count this step, body frame: (unit direction, range).
+pub struct Recalled {
+    hits: [(Vec2, f32); REMEMBERED_HITS],
+    len: usize,
+}
+
+impl Recalled {
+    pub fn iter(&self) -> impl Iterator<Item = (Vec2, f32)> + '_ {
+        self.hits[..self.len].iter().copied()
     }
 }

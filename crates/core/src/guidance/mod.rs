@@ -6,7 +6,7 @@
 //! returns a world-frame velocity and heading plus what the rules decided. It knows nothing of
 //! flight modes; the autopilot or a companion computer calls it once per revolution. Memory:
 //! `size_of::<Guidance<S>>()` (about 15.5 KB for 64 segments: 4.5 KB of it the near-hit memory,
-//! 3.3 KB the previous revolution's hits by bearing, for finding movers) plus about 9 KB of
+//! 3.3 KB the previous revolution's hits by bearing, for finding movers) plus about 11 KB of
 //! stack a step for a 360-beam scan.
 //!
 //! Walking people: a surface that closes in between revolutions faster than a wall's noise

@@ -159,7 +159,8 @@ impl<const S: usize> Guidance<S> {
             hold_s: cfg.obstacle_hold_s,
             hold_m: cfg.max_speed_m_s / cfg.approach_rate_1_s,
         };
-        let recalled = || self.memory.recalled(pose, now, recall);
+        let remembered = self.memory.recalled(pose, now, recall);
+        let recalled = || remembered.iter();
         // A mover closing in is stepped aside from; walls still bind through the guard.
         let mover = self.movers.closing(&sweep, pose, now, &cfg);
         let limited = match &mover {
