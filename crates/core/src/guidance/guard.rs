@@ -61,14 +61,7 @@ pub(super) fn guard_velocity<const N: usize, I: Iterator<Item = (Vec2, f32)>>(
         }
     }
     if !respects(out, hits(), cfg) {
-        // Between two near sides (a passage not much wider than 2 r_min) each correction
-        // breaks the other side's limit and the passes do not settle; the same command,
-        // slowed until it respects every hit, still moves on rather than stopping dead.
-        out = out * largest_respecting_fraction(out, hits(), cfg);
-        touched = true;
-        if out == Vec2::ZERO {
-            return (Vec2::ZERO, Guard::Stopped);
-        }
+        return (Vec2::ZERO, Guard::Stopped);
     }
     let action = if touched {
         Guard::Limited
@@ -89,24 +82,6 @@ pub fn respects_every_hit<const N: usize>(v: Vec2, scan: &Scan<N>, cfg: &Guidanc
     )
 }
 
-/// The largest `s` in [0, 1] for which `s · v` approaches no hit faster than allowed: every
-/// limit is at least 0, so slowing down along `v` always ends inside them.
-fn largest_respecting_fraction(
-    v: Vec2,
-    hits: impl Iterator<Item = (Vec2, f32)>,
-    cfg: &GuidanceConfig,
-) -> f32 {
-    hits.fold(1.0f32, |s, (u, range)| {
-        let toward = v.dot(u);
-        let limit = allowed_approach_m_s(range, cfg);
-        if toward > limit {
-            s.min(limit / toward)
-        } else {
-            s
-        }
-    })
-}
-
 fn respects(v: Vec2, mut hits: impl Iterator<Item = (Vec2, f32)>, cfg: &GuidanceConfig) -> bool {
     let speed = v.norm();
     hits.all(|(u, range)| {
@@ -119,7 +94,6 @@ fn respects(v: Vec2, mut hits: impl Iterator<Item = (Vec2, f32)>, cfg: &Guidance
 mod tests {
     use super::*;
     use crate::scan::Beam;
-    use core::f32::consts::PI;
 
     #[test]
     fn the_speed_toward_a_near_wall_is_cut_to_the_allowance_and_the_rest_kept() {
@@ -141,27 +115,5 @@ mod tests {
         let sweep = Sweep::new(&inside, cfg.rule_start_rad);
         let (v, _) = guard_velocity(Vec2::new(0.4, 0.0), &sweep, none, &cfg);
         assert!(v.x.abs() < 1e-6);
-    }
-
-    #[test]
-    fn between_two_near_sides_the_command_is_slowed_not_stopped() {
-        // A passage 1.1 m wide, centred: each side 0.05 m beyond r_min. Cutting the approach
-        // to one side's hits ahead adds speed toward the other's, and the passes never settle.
-        let cfg = GuidanceConfig::default();
-        let half = cfg.r_min_m() + 0.05;
-        let mut scan: Scan<72> = Scan::new(0.0);
-        for k in 0..72 {
-            let a = -PI + (k as f32 + 0.5) * (2.0 * PI / 72.0);
-            let s = sinf(a).abs();
-            let range = if s > 0.05 { half / s } else { 20.0 };
-            scan.push(Beam::new(a, range.min(20.0))).unwrap();
-        }
-        let sweep = Sweep::new(&scan, cfg.rule_start_rad);
-        let none = || core::iter::empty();
-        let ahead = Vec2::new(0.4, 0.02);
-        let (v, g) = guard_velocity(ahead, &sweep, none, &cfg);
-        assert_eq!(g, Guard::Limited, "{v:?}");
-        assert!(v.x > 0.05, "{v:?}");
-        assert!(respects_every_hit(v, &scan, &cfg), "{v:?}");
     }
 }
