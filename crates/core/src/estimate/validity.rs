@@ -15,9 +15,11 @@
 //!   one-sigma is within `degraded_max_velocity_std_m_s` and the along-axis position one-sigma
 //!   within `degraded_max_position_std_m`. Nothing but the velocity estimate keeps the vehicle
 //!   from flying down the corridor faster than it thinks, and with the axis unobserved that
-//!   estimate is the IMU's integral checked only by the drag reading, whose one-sigma grows by
-//!   about 0.1 m/s a second in a simulated corridor (its true error about a third of that): the
-//!   velocity bound is what ends a degraded leg, and it is the real one.
+//!   estimate is the IMU's integral checked only by the drag reading, which holds its
+//!   one-sigma near the velocity bound (about 0.47 m/s in the simulated building) while the
+//!   position's grows past its own: the position bound is what ends a degraded leg there, and
+//!   it also limits how long a leg flies on a speed the lidar cannot check (the bounds'
+//!   documentation in [`super::ekf::EkfConfig`]).
 //! - [`Horizontal::Unknown`]: neither, or a non-finite filter.
 
 use super::ekf::{ix, Ekf};
