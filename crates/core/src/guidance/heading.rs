@@ -5,7 +5,7 @@
 
 use super::config::GuidanceConfig;
 use super::prls::WallSegments;
-use super::sweep::{relative_angle, Sweep};
+use super::sweep::Sweep;
 use crate::geom::Vec2;
 use core::f32::consts::FRAC_PI_2;
 
@@ -30,16 +30,18 @@ pub struct HeadingChoice {
     pub body_rad: Option<f32>,
 }
 
-/// Applies the wall-chain rule to the extracted segments.
-pub fn choose_heading<const S: usize>(
+/// Applies the wall-chain rule to the segments extracted from `sweep`, which begins where the
+/// rules start looking.
+pub(super) fn choose_heading<const N: usize, const S: usize>(
     walls: &WallSegments<S>,
+    sweep: &Sweep<N>,
     cfg: &GuidanceConfig,
 ) -> HeadingChoice {
     let segments = walls.segments();
-    let in_window = |k: usize| {
-        let s = segments[k].start_m;
-        relative_angle(libm::atan2f(s.y, s.x), cfg.rule_start_rad) < cfg.rule_sweep_rad
-    };
+    // A segment is in the window when its first hit's beam is: the hit projected onto the
+    // fitted line can land a hair clockwise of the window's start, and a wall cut there by the
+    // sweep would then count as starting a full turn later and drop out of the chain.
+    let in_window = |k: usize| sweep.rel_rad(segments[k].first_pos) < cfg.rule_sweep_rad;
     let Some(first) = (0..segments.len()).find(|&k| in_window(k)) else {
         return HeadingChoice {
             rule: HeadingRule::NoWall,
@@ -114,5 +116,56 @@ impl SideClearance {
     /// Seed 002, Fig. 5: under twice the wall-follow distance the vehicle keeps to the middle.
     pub fn is_narrow(&self, cfg: &GuidanceConfig) -> bool {
         self.free_width_m().is_some_and(|w| w < 2.0 * cfg.r_goal_m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scan::{Beam, Scan};
+
+    /// One-degree beams all round: a wall along y = -1 seen from -120° (the rules' start) to
+    /// -60°, its hits alternately 1.5 cm beyond and short of it (range noise), open space, and
+    /// a wall along y = +1 from 30° to 150°.
+    fn right_wall_at_the_window_start() -> Scan<360> {
+        let mut scan = Scan::new(0.0);
+        for i in 0..360 {
+            let a = (i as f32 - 180.0).to_radians();
+            let deg = i as i32 - 180;
+            let beam = if (-120..=-60).contains(&deg) {
+                let noise = if deg % 2 == 0 { 0.015 } else { -0.015 };
+                Beam::new(a, -1.0 / libm::sinf(a) + noise)
+            } else if (30..=150).contains(&deg) {
+                Beam::new(a, 1.0 / libm::sinf(a))
+            } else {
+                Beam::invalid(a)
+            };
+            scan.push(beam).unwrap();
+        }
+        scan
+    }
+
+    #[test]
+    fn a_wall_cut_at_the_window_start_is_in_the_window() {
+        let cfg = GuidanceConfig::default();
+        let sweep = Sweep::new(&right_wall_at_the_window_start(), cfg.rule_start_rad);
+        let mut walls = WallSegments::<8>::default();
+        walls.extract_sweep(&sweep, &cfg);
+        let first = walls.segments()[0];
+        // The case this is about: the first hit, projected onto the line, lies just clockwise
+        // of where the rules start.
+        let start = libm::atan2f(first.start_m.y, first.start_m.x);
+        assert!(start < cfg.rule_start_rad, "{start}");
+        assert_eq!(first.first_pos, 0);
+        let choice = choose_heading(&walls, &sweep, &cfg);
+        // The chain starts at the right wall and stops at the opening after it.
+        assert_eq!(
+            choice.rule,
+            HeadingRule::FollowWall {
+                segment: 0,
+                gap: Some(0)
+            }
+        );
+        assert!(choice.body_rad.unwrap().abs() < 0.05, "{choice:?}");
     }
 }

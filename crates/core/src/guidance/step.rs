@@ -134,7 +134,7 @@ impl<const S: usize> Guidance<S> {
         };
         let (wish_body, yaw_body, outcome, sides, centred) = match mode {
             GuidanceMode::WallFollow => {
-                let choice = choose_heading(&self.walls, &cfg);
+                let choice = choose_heading(&self.walls, &sweep, &cfg);
                 let sides = SideClearance::measure(&sweep, choice.body_rad);
                 let centred = sides.is_narrow(&cfg);
                 let v = if centred {
