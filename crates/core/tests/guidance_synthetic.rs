@@ -228,6 +228,17 @@ fn a_door_narrower_than_the_vehicle_is_flown_past() {
     }
 }
 
+/// The second revolution's command at `pose`: a turn-around is taken when the rules choose
+/// it on two revolutions running (the first holds the heading).
+fn turned_around(world: &[Seg], pose: Pose2) -> GuidanceCommand {
+    let mut g = Guidance::<64>::new(GuidanceConfig::default()).unwrap();
+    let mut scan = look(world, pose);
+    let first = g.step(&scan, pose, GuidanceMode::WallFollow);
+    assert_eq!(first.yaw_rad, None, "{first:?}");
+    scan.stamp_s += 0.2;
+    g.step(&scan, pose, GuidanceMode::WallFollow)
+}
+
 #[test]
 fn a_dead_end_turns_the_vehicle_around() {
     // A 3 m wide hallway (wider than 2 r_goal) closed 1.5 m ahead.
@@ -236,7 +247,7 @@ fn a_dead_end_turns_the_vehicle_around() {
         wall((1.5, -1.5), (1.5, 1.5)),
         wall((1.5, 1.5), (-30.0, 1.5)),
     ];
-    let cmd = wall_follow(&world, Pose2::new(0.0, -0.3, 0.0));
+    let cmd = turned_around(&world, Pose2::new(0.0, -0.3, 0.0));
     println!("dead end: {:?}", cmd);
     assert!(matches!(
         cmd.decision.outcome,
@@ -258,7 +269,7 @@ fn a_dead_end_turns_the_vehicle_around() {
         wall((1.5, -0.9), (1.5, 0.9)),
         wall((1.5, 0.9), (-30.0, 0.9)),
     ];
-    let cmd = wall_follow(&narrow, Pose2::new(0.0, 0.0, 0.0));
+    let cmd = turned_around(&narrow, Pose2::new(0.0, 0.0, 0.0));
     assert!(cmd.decision.centred);
     assert!(matches!(
         cmd.decision.outcome,
@@ -269,6 +280,64 @@ fn a_dead_end_turns_the_vehicle_around() {
         "{:?}",
         cmd.velocity_world_m_s
     );
+}
+
+/// The end of a 2 m corridor along x, closed at x = 0, with a 1.2 m door into a room on each
+/// side just before the end (the shipped office's far end).
+fn corridor_end_between_doors() -> Vec<Seg> {
+    vec![
+        wall((-20.0, -1.0), (-3.1, -1.0)),
+        wall((-1.9, -1.0), (0.0, -1.0)),
+        wall((-20.0, 1.0), (-3.1, 1.0)),
+        wall((-1.9, 1.0), (0.0, 1.0)),
+        wall((0.0, -5.0), (0.0, 5.0)),
+        wall((-5.0, -5.0), (0.0, -5.0)),
+        wall((-5.0, 5.0), (0.0, 5.0)),
+        wall((-5.0, -5.0), (-5.0, -1.0)),
+        wall((-5.0, 1.0), (-5.0, 5.0)),
+    ]
+}
+
+#[test]
+fn a_vehicle_that_does_not_turn_turns_around_at_a_dead_end_once() {
+    // Flown kinematically, one command a revolution, by a vehicle whose body keeps its yaw (a
+    // lidar that sees all round needs no turning): the rules must turn their own heading. Were
+    // they to keep judging from body x, the end would read as a dead end and the way back as a
+    // corridor with a door on the right at alternate revolutions, and the command would flip
+    // between up and down the corridor.
+    let world = corridor_end_between_doors();
+    let cfg = GuidanceConfig::default();
+    let dt = 0.2;
+    for yaw in [0.0f32, -0.6, 0.6] {
+        let mut g = Guidance::<64>::new(cfg).unwrap();
+        let mut pose = Pose2::new(-8.0, 0.0, yaw);
+        let (mut reversals, mut last_sign, mut deepest) = (0, 0.0f32, f32::NEG_INFINITY);
+        for k in 0..200 {
+            // The simulator's XV-11 reaches 4 m.
+            let mut scan: Scan<BEAMS> = scan_within(&world, pose, BEAMS, TAU, 0.0, 1, 4.0);
+            scan.stamp_s = k as f64 * dt as f64;
+            let cmd = g.step(&scan, pose, GuidanceMode::WallFollow);
+            let [vx, vy] = cmd.velocity_world_m_s;
+            if vx.abs() > 0.2 {
+                reversals += usize::from(last_sign != 0.0 && vx.signum() != last_sign);
+                last_sign = vx.signum();
+            }
+            pose = Pose2::new(pose.x + vx * dt, pose.y + vy * dt, yaw);
+            deepest = deepest.max(pose.x);
+        }
+        println!("yaw {yaw}: deepest x {deepest:.2}, end {pose:?}, reversals {reversals}");
+        // Where the turn comes depends on where the rules' window starts (body x): within
+        // reach of the doors at the end.
+        assert!(
+            deepest > -3.5,
+            "yaw {yaw}: turned before the doors at the end ({deepest})"
+        );
+        assert_eq!(reversals, 1, "yaw {yaw}");
+        assert!(
+            pose.x < deepest - 4.0,
+            "yaw {yaw}: not on the way back: {pose:?}"
+        );
+    }
 }
 
 #[test]

@@ -2,11 +2,18 @@
 //! counter-clockwise from the start of the scan on the right until a gap wide enough to fly
 //! through; and the corridor test (free width under twice `r_goal`: keep equal distance to
 //! both sides).
+//!
+//! "Right" and "backwards" are taken about body x, except after a turn-around (a dead end, or
+//! the far side of a corridor's end past a door): the seed's vehicle turns its body around
+//! there, and the rules then look down the way back. Until the body has turned (for ever, for a
+//! vehicle that does not turn because its lidar sees all round) they look from the turned
+//! heading instead; from body x they would keep seeing the end ahead, and flip between it and
+//! the way out at every revolution (see `Guidance::step`).
 
 use super::config::GuidanceConfig;
 use super::prls::WallSegments;
 use super::sweep::Sweep;
-use crate::geom::Vec2;
+use crate::geom::{normalize_angle, Vec2};
 use core::f32::consts::FRAC_PI_2;
 
 /// What the heading rules concluded from the segments in the rules' window.
@@ -30,11 +37,13 @@ pub struct HeadingChoice {
     pub body_rad: Option<f32>,
 }
 
-/// Applies the wall-chain rule to the segments extracted from `sweep`, which begins where the
-/// rules start looking.
+/// Applies the wall-chain rule, looking from `facing_rad` (rad from body x), to the segments
+/// extracted from `sweep`, which begins where the rules start looking (`rule_start_rad` from
+/// `facing_rad`).
 pub(super) fn choose_heading<const N: usize, const S: usize>(
     walls: &WallSegments<S>,
     sweep: &Sweep<N>,
+    facing_rad: f32,
     cfg: &GuidanceConfig,
 ) -> HeadingChoice {
     let segments = walls.segments();
@@ -58,7 +67,8 @@ pub(super) fn choose_heading<const N: usize, const S: usize>(
         last += 1;
     }
     let direction = segments[last].direction_rad();
-    let rule = if gap.is_none() && direction.abs() > FRAC_PI_2 {
+    let backwards = normalize_angle(direction - facing_rad).abs() > FRAC_PI_2;
+    let rule = if gap.is_none() && backwards {
         HeadingRule::DeadEnd { segment: last }
     } else {
         HeadingRule::FollowWall { segment: last, gap }
@@ -129,9 +139,8 @@ mod tests {
     /// a wall along y = +1 from 30° to 150°.
     fn right_wall_at_the_window_start() -> Scan<360> {
         let mut scan = Scan::new(0.0);
-        for i in 0..360 {
-            let a = (i as f32 - 180.0).to_radians();
-            let deg = i as i32 - 180;
+        for deg in -180..180 {
+            let a = (deg as f32).to_radians();
             let beam = if (-120..=-60).contains(&deg) {
                 let noise = if deg % 2 == 0 { 0.015 } else { -0.015 };
                 Beam::new(a, -1.0 / libm::sinf(a) + noise)
@@ -157,7 +166,7 @@ mod tests {
         let start = libm::atan2f(first.start_m.y, first.start_m.x);
         assert!(start < cfg.rule_start_rad, "{start}");
         assert_eq!(first.first_pos, 0);
-        let choice = choose_heading(&walls, &sweep, &cfg);
+        let choice = choose_heading(&walls, &sweep, 0.0, &cfg);
         // The chain starts at the right wall and stops at the opening after it.
         assert_eq!(
             choice.rule,

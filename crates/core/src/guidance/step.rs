@@ -15,7 +15,12 @@ use super::prls::WallSegments;
 use super::sweep::Sweep;
 use crate::geom::{normalize_angle, Pose2, Vec2};
 use crate::scan::Scan;
+use core::f32::consts::FRAC_PI_2;
 use libm::atan2f;
+
+/// A turn-around is done once the body points within this of where it turned to, rad: the
+/// yaw loop of a vehicle that turns settles well within it.
+const TURN_DONE_RAD: f32 = 0.1;
 
 /// What the guidance is asked to do.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,6 +87,12 @@ pub struct Guidance<const S: usize> {
     walls: WallSegments<S>,
     memory: NearMemory,
     movers: Movers,
+    /// Where the last turn-around turned the rules to, world frame, rad, until the body has
+    /// turned there too: the rules look from it meanwhile (from body x without one).
+    turned_rad: Option<f32>,
+    /// A heading backwards of where the rules look, chosen on the previous revolution and not
+    /// yet taken, world frame, rad.
+    pending_rad: Option<f32>,
 }
 
 impl<const S: usize> Guidance<S> {
@@ -93,6 +104,8 @@ impl<const S: usize> Guidance<S> {
             walls: WallSegments::default(),
             memory: NearMemory::default(),
             movers: Movers::default(),
+            turned_rad: None,
+            pending_rad: None,
         })
     }
 
@@ -123,7 +136,14 @@ impl<const S: usize> Guidance<S> {
                 return hover(Outcome::InvalidWaypoint, None);
             }
         }
-        let sweep = Sweep::new(scan, cfg.rule_start_rad);
+        // Wall following looks from where a dead end turned it; the waypoint mode has no rules.
+        let facing = match mode {
+            GuidanceMode::WallFollow => self
+                .turned_rad
+                .map_or(0.0, |t| normalize_angle(t - pose.theta)),
+            GuidanceMode::TowardWaypoint { .. } => 0.0,
+        };
+        let sweep = Sweep::new(scan, cfg.rule_start_rad + facing);
         self.walls.extract_sweep(&sweep, &cfg);
         let part = match mode {
             GuidanceMode::WallFollow => FieldPart::WallFollow,
@@ -134,8 +154,9 @@ impl<const S: usize> Guidance<S> {
         };
         let (wish_body, yaw_body, outcome, sides, centred) = match mode {
             GuidanceMode::WallFollow => {
-                let choice = choose_heading(&self.walls, &sweep, &cfg);
-                let sides = SideClearance::measure(&sweep, choice.body_rad);
+                let choice = choose_heading(&self.walls, &sweep, facing, &cfg);
+                let heading = self.turn(choice.body_rad, facing, pose.theta);
+                let sides = SideClearance::measure(&sweep, Some(heading.unwrap_or(facing)));
                 let centred = sides.is_narrow(&cfg);
                 let v = if centred {
                     centred_velocity(&sides, &cfg)
@@ -143,7 +164,7 @@ impl<const S: usize> Guidance<S> {
                     field.velocity_m_s
                 };
                 let outcome = Outcome::WallFollow(choice.rule);
-                (v, choice.body_rad, outcome, sides, centred)
+                (v, heading, outcome, sides, centred)
             }
             GuidanceMode::TowardWaypoint { world_m } => {
                 let (v, yaw, dist) = toward(pose, world_m, &field, &cfg);
@@ -189,6 +210,44 @@ impl<const S: usize> Guidance<S> {
                 mover,
                 guard,
             },
+        }
+    }
+}
+
+impl<const S: usize> Guidance<S> {
+    /// The heading to fly (body frame; `None` holds it) for the rules' `chosen` one, looking
+    /// from `facing` (body frame) with the body at `yaw_rad` (world).
+    ///
+    /// A chosen heading backwards of `facing` is a turn-around (a dead end, or the far side of
+    /// a corridor's end past a door): it is taken when chosen on two revolutions running, and
+    /// then the rules look from it until the body has turned there. One revolution's misreading
+    /// (the far end of a corridor's wall lost at a grazing angle, a walker across the way)
+    /// holds the heading for that revolution instead of turning the vehicle round.
+    fn turn(&mut self, chosen: Option<f32>, facing: f32, yaw_rad: f32) -> Option<f32> {
+        let backward = chosen
+            .filter(|h| normalize_angle(h - facing).abs() > FRAC_PI_2)
+            .map(|h| normalize_angle(yaw_rad + h));
+        let again = |b: f32| {
+            self.pending_rad
+                .is_some_and(|p| normalize_angle(p - b).abs() <= FRAC_PI_2)
+        };
+        match backward {
+            Some(b) if again(b) => {
+                self.turned_rad = Some(b);
+                self.pending_rad = None;
+                chosen
+            }
+            Some(b) => {
+                self.pending_rad = Some(b);
+                None
+            }
+            None => {
+                self.pending_rad = None;
+                if facing.abs() <= TURN_DONE_RAD {
+                    self.turned_rad = None;
+                }
+                chosen
+            }
         }
     }
 }
