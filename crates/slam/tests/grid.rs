@@ -359,3 +359,80 @@ fn scans_that_see_through_a_passer_by_clear_it_and_leave_the_wall() {
         Err(GridError::NonFinitePose)
     );
 }
+
+/// A beam from `from` at angle `a` in a world of a wall (zero thickness) along y = 0 from
+/// x = 0 to x = 2, and a far wall at y = -3: the lidar returns nothing from the first wall
+/// when it meets it at less than 11.5° (the XV-11's grazing limit).
+fn jamb_beam(from: Vec2, a: f32) -> Beam {
+    let (dx, dy) = (a.cos(), a.sin());
+    if dy.abs() > 1e-6 {
+        let t = -from.y / dy;
+        let x = from.x + t * dx;
+        if t > 0.0 && (0.0..=2.0).contains(&x) {
+            return if dy.abs() < 0.2 {
+                Beam::invalid(a)
+            } else {
+                Beam::new(a, t)
+            };
+        }
+        let t = (-3.0 - from.y) / dy;
+        if t > 0.0 {
+            return Beam::new(a, t);
+        }
+    }
+    Beam::invalid(a)
+}
+
+fn jamb_scan(at: Vec2) -> PreparedScan {
+    let beams: Vec<Beam> = (0..360)
+        .map(|k| jamb_beam(at, (k as f32).to_radians()))
+        .collect();
+    PreparedScan::from_beams(&beams, 10.0, None).unwrap()
+}
+
+#[test]
+fn a_wall_end_seen_edge_on_by_grazing_beams_stays_occupied() {
+    // A few keyframes face the wall; many more fly along its line, 0.2 m to 0.4 m off it, so
+    // that beams passing its end at a few degrees run along its last cells.
+    let facing: Vec<(Pose2, PreparedScan)> = [0.6f32, 1.2, 1.8]
+        .iter()
+        .map(|&x| (Pose2::new(x, 1.5, 0.0), jamb_scan(Vec2::new(x, 1.5))))
+        .collect();
+    let along: Vec<(Pose2, PreparedScan)> = (0..20)
+        .map(|k| {
+            let at = Vec2::new(-3.0 + 0.1 * k as f32, 0.2 + 0.01 * k as f32);
+            (Pose2::new(at.x, at.y, 0.0), jamb_scan(at))
+        })
+        .collect();
+    let end_cells = |g: &OccupancyGrid| {
+        (0..10)
+            .filter(|&k| {
+                g.state_at(Vec2::new(1.975 - 0.05 * k as f32, 0.01)) == CellState::Occupied
+            })
+            .count()
+    };
+    let build = |config: GridConfig| {
+        let mut g = OccupancyGrid::new(config).unwrap();
+        for (pose, scan) in facing.iter().chain(&along) {
+            g.insert(*pose, scan).unwrap();
+        }
+        let mut rebuilt = OccupancyGrid::new(config).unwrap();
+        rebuilt
+            .rebuild(along.iter().chain(&facing).map(|(p, s)| (*p, s)))
+            .unwrap();
+        (g, rebuilt)
+    };
+    let (one_by_one, rebuilt) = build(GridConfig::default());
+    assert_eq!(end_cells(&one_by_one), 10, "inserted one by one");
+    assert_eq!(
+        end_cells(&rebuilt),
+        10,
+        "rebuilt, the grazing keyframes first"
+    );
+    // The same beams clearing every cell they pass wear the end away.
+    let (worn, _) = build(GridConfig {
+        solid_hits: 0,
+        ..GridConfig::default()
+    });
+    assert!(end_cells(&worn) < 5, "{} of 10 left", end_cells(&worn));
+}

@@ -56,6 +56,13 @@ pub struct GridConfig {
     /// where no beam passes to clear them, and they would thicken every wall by a cell or two
     /// on its far side. 0 turns the rule off.
     pub neighbour_hit_fraction: f32,
+    /// A beam that passes through two cells in a row holding at least this many hits each
+    /// runs along the surface there rather than through it, and adds no miss to them (0: every
+    /// beam clears every cell it passes). Three: more than the one or two hits a cell gets
+    /// from a person walking past in one keyframe, so a beam along their trail still clears
+    /// it, while a wall seen by a few keyframes keeps its end where beams that pass the end
+    /// at a shallow angle run along it (see `Tiles::add_misses_along`).
+    pub solid_hits: u16,
     /// How far an invalid ("no return") beam clears free space, m; `None`: not at all (see
     /// [`PreparedScan::from_beams`] for why that is the default).
     pub no_return_clear_m: Option<f32>,
@@ -70,6 +77,7 @@ impl Default for GridConfig {
             occupied_ratio: 0.65,
             free_ratio: 0.196,
             neighbour_hit_fraction: 0.25,
+            solid_hits: 3,
             no_return_clear_m: None,
         }
     }

@@ -23,6 +23,8 @@ pub struct OccupancyGrid {
     bounds: Option<CellRect>,
     /// End cells of the scan being inserted (kept to reuse the allocation).
     ends: Vec<Cell>,
+    /// Cells along the beam being inserted that hold a surface (kept likewise).
+    solid: Vec<(i64, Cell)>,
     scans: usize,
 }
 
@@ -46,6 +48,7 @@ impl OccupancyGrid {
             tiles: Tiles::default(),
             bounds: None,
             ends: Vec::new(),
+            solid: Vec::new(),
             scans: 0,
         })
     }
@@ -93,12 +96,20 @@ impl OccupancyGrid {
     }
 
     /// Inserts a prepared scan at `pose`: every cell a beam passes through gains a miss, the
-    /// cell a hit ends in gains a hit, the cell a clearing beam ends in a miss. A scan that
-    /// would take the grid beyond its extent or cell budget is refused whole.
+    /// cell a hit ends in gains a hit, the cell a clearing beam ends in a miss. The hits go in
+    /// first, and a beam that runs along cells holding [`GridConfig::solid_hits`] hits does not
+    /// count a miss in them (see [`Tiles::add_misses_along`]). A scan that would take the grid
+    /// beyond its extent or cell budget is refused whole.
     pub fn insert(&mut self, pose: Pose2, scan: &PreparedScan) -> Result<(), GridError> {
-        if !pose.is_finite() {
-            return Err(GridError::NonFinitePose);
-        }
+        self.insert_hits(pose, scan)?;
+        self.insert_misses(pose, scan);
+        Ok(())
+    }
+
+    /// The cell of the sensor at `pose`, and the end cells of the scan's beams in
+    /// `self.ends`, hits first; also the rectangle of those cells and the farthest coordinate
+    /// any of them reaches from the origin, m.
+    fn place(&mut self, pose: Pose2, scan: &PreparedScan) -> (Cell, CellRect, f32) {
         let origin = self.frame.cell_of(pose.translation());
         let (s, c) = (pose.theta.sin(), pose.theta.cos());
         let mut rect = CellRect::of(origin);
@@ -111,23 +122,42 @@ impl OccupancyGrid {
             rect.include(cell);
             self.ends.push(cell);
         }
-        let scan_rect = rect;
-        let rect = self.bounds.map_or(rect, |b| b.union(rect));
+        (origin, rect, farthest)
+    }
+
+    /// The first half of [`Self::insert`]: checks the room the scan needs, grows the grid to
+    /// hold it (every tile its beams pass through, so that the misses added later allocate
+    /// nothing the check did not allow), and adds its hits.
+    fn insert_hits(&mut self, pose: Pose2, scan: &PreparedScan) -> Result<(), GridError> {
+        if !pose.is_finite() {
+            return Err(GridError::NonFinitePose);
+        }
+        let (_, scan_rect, farthest) = self.place(pose, scan);
+        let rect = self.bounds.map_or(scan_rect, |b| b.union(scan_rect));
         self.check_room(rect, scan_rect, farthest)?;
         self.tiles.cover(rect);
-        let tiles = &mut self.tiles;
-        let hits = scan.hits().len();
-        for (k, &end) in self.ends.iter().enumerate() {
-            tiles.add_misses_along(origin, end);
-            if k < hits {
-                tiles.add_hit(end);
-            } else {
-                tiles.add_miss(end);
-            }
+        let origin = self.frame.cell_of(pose.translation());
+        for &end in &self.ends {
+            self.tiles.allocate_along(origin, end);
+        }
+        for &end in &self.ends[..scan.hits().len()] {
+            self.tiles.add_hit(end);
         }
         self.bounds = Some(rect);
         self.scans += 1;
         Ok(())
+    }
+
+    /// The second half of [`Self::insert`], once [`Self::insert_hits`] took the scan: the
+    /// misses along every beam.
+    fn insert_misses(&mut self, pose: Pose2, scan: &PreparedScan) {
+        let (origin, _, _) = self.place(pose, scan);
+        let hits = scan.hits().len();
+        let solid_hits = self.config.solid_hits;
+        for (k, &end) in self.ends.iter().enumerate() {
+            self.tiles
+                .add_misses_along(origin, end, k >= hits, solid_hits, &mut self.solid);
+        }
     }
 
     /// Refuses a scan that would widen the map (to `rect`) past the extent, or might need more
@@ -161,9 +191,12 @@ impl OccupancyGrid {
         Ok(())
     }
 
-    /// Clears the grid and inserts every keyframe at its (new) pose. On an error the grid
-    /// holds the keyframes before the one named. A long list is inserted in halves on two
-    /// threads when the result is sure to be the same (see [`Self::rebuilt_in_halves`]).
+    /// Clears the grid and inserts every keyframe at its (new) pose: every keyframe's hits
+    /// first, then every keyframe's misses, so that which beams run along a surface (see
+    /// [`Self::insert`]) is judged against all the hits, and the grid is the same whatever
+    /// order the keyframes come in. On an error the grid holds the keyframes before the one
+    /// named. A long list is inserted in halves on two threads when the result is sure to be
+    /// the same (see [`Self::rebuilt_in_halves`]).
     pub fn rebuild<'a>(
         &mut self,
         keyframes: impl IntoIterator<Item = (Pose2, &'a PreparedScan)>,
@@ -174,44 +207,43 @@ impl OccupancyGrid {
             *self = grid;
             return Ok(());
         }
-        for (index, (pose, scan)) in keyframes.into_iter().enumerate() {
-            self.insert(pose, scan).map_err(|e| GridError::InKeyframe {
-                index,
-                error: Box::new(e),
-            })?;
+        let mut refused = None;
+        for (index, &(pose, scan)) in keyframes.iter().enumerate() {
+            if let Err(e) = self.insert_hits(pose, scan) {
+                refused = Some(GridError::InKeyframe {
+                    index,
+                    error: Box::new(e),
+                });
+                break;
+            }
         }
-        Ok(())
+        for &(pose, scan) in &keyframes[..self.scans] {
+            self.insert_misses(pose, scan);
+        }
+        refused.map_or(Ok(()), Err)
     }
 
-    /// The (cleared) grid with the first half of the keyframes inserted on this thread and the
-    /// second on another, the counts then added. `None`, to insert them one by one instead,
-    /// unless that is sure to give the same grid: both halves went in whole, no count
-    /// saturated in either or in the sum (counts are then order-free), and the merged map is
-    /// within the extent and holds no more tiles than the budget (so no keyframe would have
-    /// been refused). Also `None` on one core or for a short list.
+    /// The (cleared) grid with the keyframes inserted in halves on this thread and another,
+    /// the counts then added: the hits of each half, then, on the sum of the hits, the misses
+    /// of each half. `None`, to insert them one by one instead, unless that is sure to give
+    /// the same grid: both halves went in whole, no count saturated in either or in a sum
+    /// (counts are then order-free), and the merged map is within the extent and holds no
+    /// more tiles than the budget (so no keyframe would have been refused). Also `None` on
+    /// one core or for a short list.
     fn rebuilt_in_halves(&self, keyframes: &[(Pose2, &PreparedScan)]) -> Option<OccupancyGrid> {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         if cores < 2 || keyframes.len() < 2 * MIN_ITEMS_PER_THREAD {
             return None;
         }
-        let (first, second) = keyframes.split_at(keyframes.len() / 2);
-        let insert_all = |part: &[(Pose2, &PreparedScan)]| {
-            let mut grid = self.clone();
+        let halves = keyframes.split_at(keyframes.len() / 2);
+        let hits = |from: &OccupancyGrid, part: &[(Pose2, &PreparedScan)]| {
+            let mut grid = from.clone();
             for &(pose, scan) in part {
-                grid.insert(pose, scan).ok()?;
+                grid.insert_hits(pose, scan).ok()?;
             }
             Some(grid)
         };
-        let (a, b) = std::thread::scope(|s| {
-            let other = s.spawn(|| insert_all(second));
-            let a = insert_all(first);
-            (
-                a,
-                other
-                    .join()
-                    .unwrap_or_else(|e| std::panic::resume_unwind(e)),
-            )
-        });
+        let (a, b) = in_two_threads(halves, |part| hits(self, part));
         let (mut grid, b) = (a?, b?);
         let rect = grid.bounds?.union(b.bounds?);
         let r = self.config.resolution_m;
@@ -221,10 +253,18 @@ impl OccupancyGrid {
             return None;
         }
         grid.tiles.cover(rect);
-        grid.tiles.add(&b.tiles).then_some(())?;
+        grid.tiles.add(&b.tiles, true).then_some(())?;
         grid.bounds = Some(rect);
         grid.scans += b.scans;
-        Some(grid)
+        let misses = |part: &[(Pose2, &PreparedScan)]| {
+            let mut half = grid.clone();
+            for &(pose, scan) in part {
+                half.insert_misses(pose, scan);
+            }
+            half
+        };
+        let (mut a, b) = in_two_threads(halves, misses);
+        a.tiles.add(&b.tiles, false).then_some(a)
     }
 
     /// Lets the beams of scans at their poses clear what a keyframe saw only in passing: every
@@ -336,6 +376,20 @@ impl OccupancyGrid {
     pub fn allocated_cells(&self) -> usize {
         self.tiles.allocated() * TILE * TILE
     }
+}
+
+/// `f` of each of a pair, the first on this thread and the second on another.
+fn in_two_threads<T: Send, R: Send>((first, second): (T, T), f: impl Fn(T) -> R + Sync) -> (R, R) {
+    std::thread::scope(|s| {
+        let other = s.spawn(|| f(second));
+        let a = f(first);
+        (
+            a,
+            other
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e)),
+        )
+    })
 }
 
 /// Splits `items` among the available cores (at most [`MAX_THREADS`], and only when there are

@@ -73,22 +73,25 @@ impl Tiles {
         side(a.0, b.0) * side(a.1, b.1)
     }
 
-    /// Adds `other`'s counts to these, which must cover every tile of `other`. Refuses (false,
-    /// and these counts are then partly added) when a sum would overflow, or either side has
-    /// saturated: only counts that never saturated add up to what one pass of all the updates
-    /// would give (a count saturates at its 65,536th update).
-    pub fn add(&mut self, other: &Tiles) -> bool {
+    /// Adds `other`'s misses to these, and its hits too when `with_hits`; these must cover
+    /// every tile of `other`. Refuses (false, and these counts are then partly added) when a
+    /// sum would overflow, or either side has saturated: only counts that never saturated add
+    /// up to what one pass of all the updates would give (a count saturates at its 65,536th
+    /// update).
+    pub fn add(&mut self, other: &Tiles, with_hits: bool) -> bool {
         if self.saturated || other.saturated {
             return false;
         }
+        let add = |to: &mut [u16], from: &[u16]| {
+            to.iter_mut()
+                .zip(from)
+                .all(|(t, &f)| t.checked_add(f).map(|v| *t = v).is_some())
+        };
         for (_, corner, from) in other.iter_slots() {
             let (to, _) = self.tile_mut(corner);
-            let pairs = to.hits.iter_mut().zip(&from.hits);
-            for (t, &f) in pairs.chain(to.misses.iter_mut().zip(&from.misses)) {
-                match t.checked_add(f) {
-                    Some(v) => *t = v,
-                    None => return false,
-                }
+            if !(add(&mut to.misses, &from.misses) && (!with_hits || add(&mut to.hits, &from.hits)))
+            {
+                return false;
             }
         }
         true
@@ -185,11 +188,29 @@ impl Tiles {
         self.saturated |= full;
     }
 
-    /// One miss in every cell of the line from `from` up to, not including, `to`: the cells of
-    /// [`super::raycast::trace`], walked in runs that stay inside one tile so that the tile is
-    /// looked up once a run (up to 64 cells) and each cell costs an increment and two adds.
-    /// Both cells must lie inside the covered rectangle.
-    pub fn add_misses_along(&mut self, from: Cell, to: Cell) {
+    /// One miss in every cell of the line from `from` up to, not including, `to` (and in `to`
+    /// as well when `end_too`): the cells of [`super::raycast::trace`], walked in runs that stay
+    /// inside one tile so that the tile is looked up once a run (up to 64 cells) and each cell
+    /// costs an increment, a compare and two adds. Both cells must lie inside the covered
+    /// rectangle.
+    ///
+    /// Cells holding at least `solid_hits` hits (0: none) are set aside in `solid` (a buffer
+    /// reused between calls) and gain their miss only if the line crosses them: a line that
+    /// passes through two such cells in a row runs along the surface that made them, and a
+    /// beam that runs along a surface says nothing about it. A wall is a line of zero
+    /// thickness in a cell; a beam crossing it at a steep angle must meet it in any cell
+    /// where both lie, but a beam grazing it can pass through the wall's cells beside it, and
+    /// the lidar returns nothing from a surface at grazing incidence, so such beams would
+    /// wear away the end of every wall they pass at a shallow angle (the jambs of a door seen
+    /// from along the wall).
+    pub fn add_misses_along(
+        &mut self,
+        from: Cell,
+        to: Cell,
+        end_too: bool,
+        solid_hits: u16,
+        solid: &mut Vec<(i64, Cell)>,
+    ) {
         let line = Line::new(from, to);
         let Line {
             major,
@@ -199,31 +220,34 @@ impl Tiles {
         } = line;
         let offset_step = |(di, dj): (i32, i32)| di as isize + (dj as isize) * TILE as isize;
         let (major_off, minor_off) = (offset_step(major_step), offset_step(minor_step));
-        let (sx, sy) = (major_step.0 + minor_step.0, major_step.1 + minor_step.1);
-        // Steps possible along one axis before leaving the tile (unbounded on a still axis).
-        let room = |local: i32, step: i32| match step {
-            1 => (TILE_MASK - local) as i64,
-            -1 => local as i64,
-            _ => i64::MAX,
+        let diagonal = (major_step.0 + minor_step.0, major_step.1 + minor_step.1);
+        let threshold = if solid_hits == 0 {
+            u32::MAX
+        } else {
+            u32::from(solid_hits)
         };
+        solid.clear();
         let mut err = line.first_err();
         let mut cell = from;
         let mut left = major;
         while left > 0 {
-            let (li, lj) = (cell.i & TILE_MASK, cell.j & TILE_MASK);
-            // Either coordinate moves at most one cell a step, so this many cells stay inside.
-            let run = left.min(1 + room(li, sx).min(room(lj, sy)));
+            let run = run_in_tile(cell, left, diagonal);
+            let corner = Cell::new(cell.i & !TILE_MASK, cell.j & !TILE_MASK);
             let (tile, k) = self.tile_mut(cell);
             let mut off = k as isize;
             let mut minor_steps = 0i64;
             let mut saturated = false;
-            for _ in 0..run {
+            for t in major - left..major - left + run {
                 let o = off as usize;
-                if tile.misses[o] == u16::MAX {
-                    tile.halve(o);
-                    saturated = true;
+                if u32::from(tile.hits[o]) >= threshold {
+                    solid.push((t, cell_at(corner, o)));
+                } else {
+                    if tile.misses[o] == u16::MAX {
+                        tile.halve(o);
+                        saturated = true;
+                    }
+                    tile.misses[o] += 1;
                 }
-                tile.misses[o] += 1;
                 if err > 0 {
                     off += minor_off;
                     err -= 2 * major;
@@ -237,6 +261,52 @@ impl Tiles {
             cell = Cell::new(
                 cell.i + moved(major_step.0, minor_step.0),
                 cell.j + moved(major_step.1, minor_step.1),
+            );
+            left -= run;
+        }
+        if u32::from(self.counts(to).0) >= threshold {
+            solid.push((major, to));
+        } else if end_too {
+            self.add_miss(to);
+        }
+        for n in 0..solid.len() {
+            let (t, c) = solid[n];
+            let run_along = (n > 0 && solid[n - 1].0 == t - 1)
+                || solid.get(n + 1).is_some_and(|&(next, _)| next == t + 1);
+            if !run_along && (t < major || end_too) {
+                self.add_miss(c);
+            }
+        }
+    }
+
+    /// Allocates every tile the line from `from` to `to` passes through (the cells of
+    /// [`Self::add_misses_along`]), counting nothing. Both cells must lie inside the covered
+    /// rectangle.
+    pub fn allocate_along(&mut self, from: Cell, to: Cell) {
+        let line = Line::new(from, to);
+        let diagonal = (
+            line.major_step.0 + line.minor_step.0,
+            line.major_step.1 + line.minor_step.1,
+        );
+        let mut err = line.first_err();
+        let mut cell = from;
+        let mut left = line.major;
+        self.tile_mut(to);
+        while left > 0 {
+            self.tile_mut(cell);
+            let run = run_in_tile(cell, left, diagonal);
+            let mut minor_steps = 0i64;
+            for _ in 0..run {
+                if err > 0 {
+                    err -= 2 * line.major;
+                    minor_steps += 1;
+                }
+                err += 2 * line.minor;
+            }
+            let moved = |a: i32, b: i32| (i64::from(a) * run + i64::from(b) * minor_steps) as i32;
+            cell = Cell::new(
+                cell.i + moved(line.major_step.0, line.minor_step.0),
+                cell.j + moved(line.major_step.1, line.minor_step.1),
             );
             left -= run;
         }
@@ -306,6 +376,19 @@ impl Tiles {
     }
 }
 
+/// Steps of a line at `cell` (with `left` steps to go, each moving each coordinate by at most
+/// the matching one of `diagonal`) that stay inside the cell's tile: at least 1.
+fn run_in_tile(cell: Cell, left: i64, diagonal: (i32, i32)) -> i64 {
+    // Steps possible along one axis before leaving the tile (unbounded on a still axis).
+    let room = |local: i32, step: i32| match step {
+        1 => (TILE_MASK - local) as i64,
+        -1 => local as i64,
+        _ => i64::MAX,
+    };
+    let (i, j) = (cell.i & TILE_MASK, cell.j & TILE_MASK);
+    left.min(1 + room(i, diagonal.0).min(room(j, diagonal.1)))
+}
+
 /// The cell at offset `k` of the tile whose lower-left cell is `corner`.
 pub fn cell_at(corner: Cell, k: usize) -> Cell {
     Cell::new(
@@ -322,7 +405,8 @@ mod tests {
 
     proptest! {
         /// The tile-run walk adds exactly the misses of the reference line, across tile
-        /// borders and on both sides of zero.
+        /// borders and on both sides of zero, and allocates the tiles it passes, as many as
+        /// allocating along the line does.
         #[test]
         fn runs_inside_tiles_add_the_reference_lines_misses(
             ai in -200i32..200, aj in -200i32..200, bi in -200i32..200, bj in -200i32..200,
@@ -332,9 +416,15 @@ mod tests {
             let (mut fast, mut reference) = (Tiles::default(), Tiles::default());
             fast.cover(rect);
             reference.cover(rect);
-            fast.add_misses_along(a, b);
-            fast.add_misses_along(a, b);
+            let mut solid = Vec::new();
+            fast.add_misses_along(a, b, false, 0, &mut solid);
+            fast.add_misses_along(a, b, true, 0, &mut solid);
             trace(a, b, |c| { reference.add_miss(c); reference.add_miss(c); });
+            reference.add_miss(b);
+            let mut allocated = Tiles::default();
+            allocated.cover(rect);
+            allocated.allocate_along(a, b);
+            prop_assert_eq!(allocated.allocated(), fast.allocated(), "the same tiles");
             for j in rect.min.j..=rect.max.j {
                 for i in rect.min.i..=rect.max.i {
                     let c = Cell::new(i, j);
@@ -404,12 +494,15 @@ mod tests {
             t
         };
         let mut a = with(3, 40_000);
-        assert!(a.add(&with(2, 25_535)));
+        assert!(a.add(&with(2, 25_535), true));
         assert_eq!(a.counts(c), (5, u16::MAX));
-        assert!(!with(3, 40_000).add(&with(0, 25_536)), "the sum overflows");
+        assert!(
+            !with(3, 40_000).add(&with(0, 25_536), true),
+            "the sum overflows"
+        );
         // Saturated on its own: the halving depended on what came first, so no sum is right.
-        assert!(!with(1, 0).add(&with(3, 70_000)));
-        assert!(!with(3, 70_000).add(&with(1, 0)));
+        assert!(!with(1, 0).add(&with(3, 70_000), true));
+        assert!(!with(3, 70_000).add(&with(1, 0), true));
     }
 
     #[test]
