@@ -394,9 +394,11 @@ fn jamb_scan(at: Vec2) -> PreparedScan {
 fn a_wall_end_seen_edge_on_by_grazing_beams_stays_occupied() {
     // A few keyframes face the wall; many more fly along its line, 0.2 m to 0.4 m off it, so
     // that beams passing its end at a few degrees run along its last cells.
-    let facing: Vec<(Pose2, PreparedScan)> = [0.6f32, 1.2, 1.8]
-        .iter()
-        .map(|&x| (Pose2::new(x, 1.5, 0.0), jamb_scan(Vec2::new(x, 1.5))))
+    let facing: Vec<(Pose2, PreparedScan)> = (0..6)
+        .map(|k| {
+            let at = Vec2::new(0.4 + 0.3 * k as f32, 1.5);
+            (Pose2::new(at.x, at.y, 0.0), jamb_scan(at))
+        })
         .collect();
     let along: Vec<(Pose2, PreparedScan)> = (0..20)
         .map(|k| {
@@ -435,4 +437,44 @@ fn a_wall_end_seen_edge_on_by_grazing_beams_stays_occupied() {
         ..GridConfig::default()
     });
     assert!(end_cells(&worn) < 5, "{} of 10 left", end_cells(&worn));
+}
+
+#[test]
+fn a_person_seen_from_the_front_is_cleared_by_the_beams_that_cross_where_they_stood() {
+    // A person 0.4 m across stands 2 m in front of the sensor for a few keyframes (their
+    // front spread over two cells in depth by range noise), then walks away; the keyframes
+    // after see the wall 4 m away through where they stood.
+    let scan = |person: bool, k: usize| {
+        let beams: Vec<Beam> = (-40..=40)
+            .map(|b| {
+                let a = (b as f32 * 0.5).to_radians();
+                let wall = 4.0 / a.cos();
+                let near = 2.0 / a.cos() + if (b + k as i32) % 2 == 0 { 0.0 } else { 0.05 };
+                let r = if person && (2.0 * a.tan()).abs() < 0.2 {
+                    near
+                } else {
+                    wall
+                };
+                Beam::new(a, r)
+            })
+            .collect();
+        PreparedScan::from_beams(&beams, 10.0, None).unwrap()
+    };
+    let pose = Pose2::new(0.0, 0.0, 0.0);
+    let mut g = grid();
+    for k in 0..6 {
+        g.insert(pose, &scan(true, k)).unwrap();
+    }
+    let stood = (0..8)
+        .map(|k| Vec2::new(2.02, -0.175 + 0.05 * k as f32))
+        .filter(|&p| g.state_at(p) == CellState::Occupied)
+        .count();
+    assert!(stood >= 6, "{stood} of 8 cells occupied while they stand");
+    for k in 0..60 {
+        g.insert(pose, &scan(false, k)).unwrap();
+    }
+    for k in 0..8 {
+        let p = Vec2::new(2.02, -0.175 + 0.05 * k as f32);
+        assert_eq!(g.state_at(p), CellState::Free, "{p:?}");
+    }
 }

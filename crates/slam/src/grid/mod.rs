@@ -56,12 +56,13 @@ pub struct GridConfig {
     /// where no beam passes to clear them, and they would thicken every wall by a cell or two
     /// on its far side. 0 turns the rule off.
     pub neighbour_hit_fraction: f32,
-    /// A beam that passes through two cells in a row holding at least this many hits each
-    /// runs along the surface there rather than through it, and adds no miss to them (0: every
-    /// beam clears every cell it passes). Three: more than the one or two hits a cell gets
-    /// from a person walking past in one keyframe, so a beam along their trail still clears
-    /// it, while a wall seen by a few keyframes keeps its end where beams that pass the end
-    /// at a shallow angle run along it (see `Tiles::add_misses_along`).
+    /// Cells holding at least this many hits are a surface, and a beam that passes through
+    /// one where the surface runs along the beam adds no miss to it (0: every beam clears
+    /// every cell it passes; see `Tiles::add_misses_along`). Without it, the beams that pass a
+    /// wall's end at a shallow angle wear away its last few decimetres (a door's jambs), the
+    /// lidar returning nothing from the wall itself at that angle. The count is more than the
+    /// one or two hits a cell gets from one keyframe of the XV-11 at a few metres, so a
+    /// surface is one that several keyframes saw.
     pub solid_hits: u16,
     /// How far an invalid ("no return") beam clears free space, m; `None`: not at all (see
     /// [`PreparedScan::from_beams`] for why that is the default).

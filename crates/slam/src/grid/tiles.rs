@@ -195,14 +195,16 @@ impl Tiles {
     /// rectangle.
     ///
     /// Cells holding at least `solid_hits` hits (0: none) are set aside in `solid` (a buffer
-    /// reused between calls) and gain their miss only if the line crosses them: a line that
-    /// passes through two such cells in a row runs along the surface that made them, and a
-    /// beam that runs along a surface says nothing about it. A wall is a line of zero
-    /// thickness in a cell; a beam crossing it at a steep angle must meet it in any cell
-    /// where both lie, but a beam grazing it can pass through the wall's cells beside it, and
-    /// the lidar returns nothing from a surface at grazing incidence, so such beams would
-    /// wear away the end of every wall they pass at a shallow angle (the jambs of a door seen
-    /// from along the wall).
+    /// reused between calls) and gain their miss only if the line crosses the surface that made
+    /// them: if more of their two neighbours along the line's major axis hold such hits than of
+    /// their two neighbours across it, the surface there runs along the line (within 45° of
+    /// it), and a beam that runs along a surface says nothing about it. A wall is a line of
+    /// zero thickness in a cell; a beam crossing it steeply meets it in any cell where both
+    /// lie, but a beam grazing it can pass through the wall's cells beside it, and the lidar
+    /// returns nothing from a surface at grazing incidence, so such beams would wear away the
+    /// end of every wall they pass at a shallow angle (the jambs of a door seen from along
+    /// the wall). A wall seen face on, whose hits spread over a cell or two in depth, and a
+    /// person seen from the front (a short arc) extend across the beams that cross them.
     pub fn add_misses_along(
         &mut self,
         from: Cell,
@@ -269,11 +271,18 @@ impl Tiles {
         } else if end_too {
             self.add_miss(to);
         }
-        for n in 0..solid.len() {
-            let (t, c) = solid[n];
-            let run_along = (n > 0 && solid[n - 1].0 == t - 1)
-                || solid.get(n + 1).is_some_and(|&(next, _)| next == t + 1);
-            if !run_along && (t < major || end_too) {
+        let is_solid =
+            |tiles: &Tiles, i: i32, j: i32| u32::from(tiles.counts(Cell::new(i, j)).0) >= threshold;
+        let across_step = (major_step.1.abs(), major_step.0.abs());
+        for &(t, c) in solid.iter() {
+            if t == major && !end_too {
+                continue;
+            }
+            let pair = |(di, dj): (i32, i32)| {
+                usize::from(is_solid(self, c.i + di, c.j + dj))
+                    + usize::from(is_solid(self, c.i - di, c.j - dj))
+            };
+            if pair(major_step) <= pair(across_step) {
                 self.add_miss(c);
             }
         }
