@@ -75,3 +75,36 @@ fn a_featureless_corridor_stays_degenerate_where_its_walls_leave_the_lidars_reac
     // Across the axis the walls still decide.
     assert!((r.motion.y - truth.y).abs() < 0.02, "{:?}", r.motion);
 }
+
+/// A 2 m corridor along x that opens at x = 2 into a 2 m cross corridor and goes on beyond
+/// x = 4: within a 4 m reach only the two corners where the side walls stop are in view.
+fn corridor_into_a_crossing() -> Vec<Seg> {
+    let mut walls = Vec::new();
+    for y in [-1.0f32, 1.0] {
+        let far = 10.0 * y;
+        walls.push((Vec2::new(-50.0, y), Vec2::new(2.0, y)));
+        walls.push((Vec2::new(2.0, y), Vec2::new(2.0, far)));
+        walls.push((Vec2::new(4.0, y), Vec2::new(4.0, far)));
+        walls.push((Vec2::new(4.0, y), Vec2::new(50.0, y)));
+    }
+    walls
+}
+
+#[test]
+fn the_two_corners_of_a_crossing_ahead_pin_the_corridor_axis() {
+    for (i, x) in [-0.2f32, 0.0, 0.3].into_iter().enumerate() {
+        let a = Pose2::new(x, 0.1, 0.0);
+        let b = Pose2::new(x + 0.25, 0.0, 0.03);
+        let (r, truth) = match_along(&corridor_into_a_crossing(), a, b, 60 + 10 * i as u64);
+        assert_eq!(r.quality.degenerate_direction, None, "x {x}: {r:?}");
+        // Two ends give a few centimetres, and the variance says so.
+        let (error, var_x) = ((r.motion.x - truth.x).abs(), r.covariance[0][0]);
+        assert!(var_x > 1e-6 && var_x < 4e-3, "x {x}: variance {var_x}");
+        assert!(error < 0.06, "x {x}: along-axis error {error} ({r:?})");
+        assert!(
+            error < 3.0 * var_x.sqrt(),
+            "x {x}: {error} against sigma {}",
+            var_x.sqrt()
+        );
+    }
+}
