@@ -415,13 +415,13 @@ impl Ekf {
         r: &SMatrix<f32, M, M>,
         pht: &SMatrix<f32, N, M>,
     ) {
-        let mut a_p = self.p;
-        a_p.gemm(-1.0, k, &pht.transpose(), 1.0);
-        let a_p_ht = times_ht(&a_p, h);
+        // Worked in place: every N x N temporary is 1.3 KB of a microcontroller's stack.
+        let p = &mut self.p;
+        p.gemm(-1.0, k, &pht.transpose(), 1.0);
+        let a_p_ht = times_ht(p, h);
         // (I - KH) P (I - KH)^T + K R K^T = A P - (A P H^T - K R) K^T.
-        let mut p = a_p;
         p.gemm(-1.0, &(a_p_ht - k * r), &k.transpose(), 1.0);
-        self.p = (p + p.transpose()) * 0.5;
+        symmetrise(p);
     }
 }
 
@@ -442,6 +442,18 @@ fn well_conditioned<const M: usize>(r: &SMatrix<f32, M, M>) -> bool {
     };
     let l = chol.l_dirty();
     (0..M).all(|i| l[(i, i)] * l[(i, i)] >= MIN_NOISE_PIVOT * r[(i, i)])
+}
+
+/// Replaces `p` by `(p + pᵀ) / 2` in place (the same values as the expression, without its
+/// two N x N temporaries).
+pub(super) fn symmetrise(p: &mut Covariance) {
+    for i in 0..N {
+        for j in i + 1..N {
+            let mean = (p[(i, j)] + p[(j, i)]) * 0.5;
+            p[(i, j)] = mean;
+            p[(j, i)] = mean;
+        }
+    }
 }
 
 /// True when no value is NaN or infinite (v * 0 is 0 for finite v and NaN otherwise): cheaper

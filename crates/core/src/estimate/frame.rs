@@ -25,7 +25,7 @@
 //! ([`super::scan_match`]): together, no relative match informs the frame's heading.
 //! Absolute measurements (a companion's map pose) do, as they should.
 
-use super::ekf::{ix, Ekf, State};
+use super::ekf::{ix, symmetrise, Ekf, State, N};
 
 impl Ekf {
     /// Moves the covariance's frame-turn direction from the estimate `before` a correction to
@@ -48,12 +48,22 @@ impl Ekf {
             return;
         }
         let (yaw, clone_yaw) = (ix::YAW, ix::CLONE + 2);
-        // B = A P, then A P Aᵀ = B Aᵀ.
-        let mut b = self.p;
-        b += live * self.p.row(yaw) + clone * self.p.row(clone_yaw);
-        let mut p = b;
-        p += b.column(yaw) * live.transpose() + b.column(clone_yaw) * clone.transpose();
-        self.p = (p + p.transpose()) * 0.5;
+        // B = A P, then A P Aᵀ = B Aᵀ, worked in place: every N x N temporary is 1.3 KB of a
+        // microcontroller's stack.
+        let p = &mut self.p;
+        let (row, clone_row) = (p.row(yaw).transpose(), p.row(clone_yaw).transpose());
+        for i in 0..N {
+            for j in 0..N {
+                p[(i, j)] += live[i] * row[j] + clone[i] * clone_row[j];
+            }
+        }
+        let (column, clone_column) = (p.column(yaw).into_owned(), p.column(clone_yaw).into_owned());
+        for i in 0..N {
+            for j in 0..N {
+                p[(i, j)] += column[i] * live[j] + clone_column[i] * clone[j];
+            }
+        }
+        symmetrise(p);
     }
 }
 
