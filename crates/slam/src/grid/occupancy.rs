@@ -101,8 +101,8 @@ impl OccupancyGrid {
     /// count a miss in them (see [`Tiles::add_misses_along`]). A scan that would take the grid
     /// beyond its extent or cell budget is refused whole.
     pub fn insert(&mut self, pose: Pose2, scan: &PreparedScan) -> Result<(), GridError> {
-        self.insert_hits(pose, scan)?;
-        self.insert_misses(pose, scan);
+        let origin = self.insert_hits(pose, scan, false)?;
+        self.add_misses(origin, scan.hits().len());
         Ok(())
     }
 
@@ -126,33 +126,46 @@ impl OccupancyGrid {
     }
 
     /// The first half of [`Self::insert`]: checks the room the scan needs, grows the grid to
-    /// hold it (every tile its beams pass through, so that the misses added later allocate
-    /// nothing the check did not allow), and adds its hits.
-    fn insert_hits(&mut self, pose: Pose2, scan: &PreparedScan) -> Result<(), GridError> {
+    /// hold it, and adds its hits; returns the sensor's cell, with the beams' end cells left
+    /// in `self.ends`. With `reserve_beams`, also allocates every tile the beams pass through,
+    /// so that misses added after other scans' checks allocate nothing those checks did not
+    /// allow (a rebuild); misses added at once allocate within this scan's own check.
+    fn insert_hits(
+        &mut self,
+        pose: Pose2,
+        scan: &PreparedScan,
+        reserve_beams: bool,
+    ) -> Result<Cell, GridError> {
         if !pose.is_finite() {
             return Err(GridError::NonFinitePose);
         }
-        let (_, scan_rect, farthest) = self.place(pose, scan);
+        let (origin, scan_rect, farthest) = self.place(pose, scan);
         let rect = self.bounds.map_or(scan_rect, |b| b.union(scan_rect));
         self.check_room(rect, scan_rect, farthest)?;
         self.tiles.cover(rect);
-        let origin = self.frame.cell_of(pose.translation());
-        for &end in &self.ends {
-            self.tiles.allocate_along(origin, end);
+        if reserve_beams {
+            for &end in &self.ends {
+                self.tiles.allocate_along(origin, end);
+            }
         }
         for &end in &self.ends[..scan.hits().len()] {
             self.tiles.add_hit(end);
         }
         self.bounds = Some(rect);
         self.scans += 1;
-        Ok(())
+        Ok(origin)
     }
 
-    /// The second half of [`Self::insert`], once [`Self::insert_hits`] took the scan: the
-    /// misses along every beam.
+    /// The misses along every beam of a scan whose hits [`Self::insert_hits`] took earlier,
+    /// with its beams reserved (a rebuild adds all hits before any miss).
     fn insert_misses(&mut self, pose: Pose2, scan: &PreparedScan) {
         let (origin, _, _) = self.place(pose, scan);
-        let hits = scan.hits().len();
+        self.add_misses(origin, scan.hits().len());
+    }
+
+    /// The misses along the beams from `origin` to the end cells in `self.ends`, of which the
+    /// first `hits` end in a hit.
+    fn add_misses(&mut self, origin: Cell, hits: usize) {
         let solid_hits = self.config.solid_hits;
         for (k, &end) in self.ends.iter().enumerate() {
             self.tiles
@@ -209,7 +222,7 @@ impl OccupancyGrid {
         }
         let mut refused = None;
         for (index, &(pose, scan)) in keyframes.iter().enumerate() {
-            if let Err(e) = self.insert_hits(pose, scan) {
+            if let Err(e) = self.insert_hits(pose, scan, true) {
                 refused = Some(GridError::InKeyframe {
                     index,
                     error: Box::new(e),
@@ -239,7 +252,7 @@ impl OccupancyGrid {
         let hits = |from: &OccupancyGrid, part: &[(Pose2, &PreparedScan)]| {
             let mut grid = from.clone();
             for &(pose, scan) in part {
-                grid.insert_hits(pose, scan).ok()?;
+                grid.insert_hits(pose, scan, true).ok()?;
             }
             Some(grid)
         };
