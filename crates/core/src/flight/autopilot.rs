@@ -16,6 +16,7 @@ use crate::control::sas;
 use crate::estimate::ekf::Outcome;
 use crate::estimate::estimator::{Estimator, EstimatorCounters, Situation};
 use crate::estimate::pose_fix::CompanionFrame;
+use crate::guidance::nearest_hits::NearestHits;
 use crate::msgs::{
     CommandResult, EstimatedState, FailsafeReason, FlightMode, GroundAck, GroundCommand, Inputs,
     MotorCommands, Outputs, PilotInput, PositionSetpoint, Refusal, ScanMatchStatus,
@@ -60,6 +61,8 @@ pub struct Autopilot {
     low_thrust: bool,
     faults: FaultCounters,
     last: Outputs,
+    /// The latest revolution's nearest hits, against which mission setpoints are guarded.
+    nearest_hits: Option<NearestHits>,
 }
 
 impl Autopilot {
@@ -92,6 +95,7 @@ impl Autopilot {
             low_thrust: false,
             faults: FaultCounters::default(),
             last: Outputs::default(),
+            nearest_hits: None,
         }
     }
 
@@ -102,6 +106,12 @@ impl Autopilot {
 
     pub fn faults(&self) -> &FaultCounters {
         &self.faults
+    }
+
+    /// Takes in the nearest hits of a revolution that just completed: the mission setpoints
+    /// are guarded against them until the next one.
+    pub fn observe_hits(&mut self, hits: NearestHits) {
+        self.nearest_hits = Some(hits);
     }
 
     pub fn estimator_counters(&self) -> &EstimatorCounters {

@@ -1,9 +1,11 @@
-//! What each flying mode asks of the cascade: the hold point, the companion's mission target,
-//! or a landing that holds only the axes the estimate still knows.
+//! What each flying mode asks of the cascade: the hold point, the companion's mission target
+//! (checked against the latest revolution, [`crate::flight::setpoint_guard`]), or a landing that holds
+//! only the axes the estimate still knows.
 
 use super::Autopilot;
 use crate::control::cascade::{CascadeSetpoint, FeedForward, Vertical};
 use crate::estimate::validity::Horizontal;
+use crate::flight::setpoint_guard::guard_target;
 use crate::msgs::{EstimatedState, FailsafeReason, FlightMode, MissionSetpoint, PositionSetpoint};
 
 impl Autopilot {
@@ -60,10 +62,19 @@ impl Autopilot {
                 // mission holds, as the hold mode would, until the failsafe lands or clears.
                 let lidar_lost = failsafe == Some(FailsafeReason::LidarLost);
                 let frame = *self.estimator.companion_frame();
-                let gain = self.config.cascade.position_xy.kp;
-                let [x, y, yaw_rad] = self.mission.target(t_s, &frame, e, gain, lidar_lost);
+                let loop_xy = self.config.cascade.position_xy;
+                let [x, y, yaw_rad] = self.mission.target(t_s, &frame, e, loop_xy.kp, lidar_lost);
+                let mut target = [x, y];
+                let limit = self.config.mission.guard;
+                let guarded = self.nearest_hits.as_ref().and_then(|hits| {
+                    guard_target(target, e, hits, &limit, loop_xy.kp, loop_xy.output_limit)
+                });
+                if let Some(g) = guarded {
+                    self.mission.count_guarded();
+                    target = g;
+                }
                 Some(CascadeSetpoint {
-                    horizontal_m: Some([x, y]),
+                    horizontal_m: Some(target),
                     feed_forward: None,
                     vertical: Vertical::Height(self.home.position_m[2]),
                     yaw_rad,

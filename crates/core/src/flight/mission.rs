@@ -23,6 +23,7 @@
 //! switch and manual takeover act exactly as without a mission.
 
 use crate::estimate::pose_fix::CompanionFrame;
+use crate::guidance::{ApproachLimit, GuidanceConfig};
 use crate::msgs::{
     CompanionMessages, CompanionSetpoint, EstimatedState, FailsafeReason, FlightMode,
     MissionCommand, SetpointTarget,
@@ -43,6 +44,11 @@ pub struct MissionConfig {
     /// The return ends, and the landing starts, this close (m, horizontal) to the take-off point.
     pub home_tolerance_m: f32,
     pub energy: EnergyConfig,
+    /// The flight part's own check of every mission setpoint against the latest revolution:
+    /// no faster toward a hit than this allows, in the frame the setpoint is flown in (see
+    /// [`crate::guidance::guard`]). The guidance's rule, so a setpoint the companion guarded in
+    /// the same frame passes unchanged.
+    pub guard: ApproachLimit,
 }
 
 impl Default for MissionConfig {
@@ -53,6 +59,7 @@ impl Default for MissionConfig {
             explore_budget_s: 600.0,
             home_tolerance_m: 0.15,
             energy: EnergyConfig::default(),
+            guard: ApproachLimit::from(&GuidanceConfig::default()),
         }
     }
 }
@@ -140,6 +147,8 @@ pub struct MissionCounters {
     pub bad_path_home: u32,
     /// Steps flown holding because the setpoint was stale.
     pub stale_steps: u32,
+    /// Steps whose target the flight part's guard pulled back from a hit.
+    pub guarded_steps: u32,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -174,6 +183,11 @@ impl Mission {
 
     pub fn counters(&self) -> &MissionCounters {
         &self.counters
+    }
+
+    /// Counts a step whose target the flight part's guard pulled back.
+    pub(super) fn count_guarded(&mut self) {
+        self.counters.guarded_steps = self.counters.guarded_steps.saturating_add(1);
     }
 
     /// Takes in what arrived at `t_s`; `battery_v` is a finite reading or `None`.

@@ -508,3 +508,52 @@ fn a_companion_that_gives_up_the_way_home_lands_in_place_with_the_reason() {
     );
     assert!(d < 0.15, "landed {d} m from where it gave up");
 }
+
+/// A revolution of a wall across world x at `wall_x` (m), seen from the vehicle's true pose,
+/// as the lidar would hand it over: up to 6 m, a beam a degree.
+fn wall_ahead(v: &TestVehicle, wall_x: f32) -> crate::guidance::nearest_hits::NearestHits {
+    use crate::scan::{Beam, Scan};
+    let (_, _, yaw) = v.roll_pitch_yaw();
+    let mut scan: Scan<360> = Scan::new(v.t_s);
+    for i in 0..360 {
+        let bearing = (i as f32).to_radians();
+        let c = libm::cosf(yaw + bearing);
+        let range = (wall_x - v.position_m.x) / c;
+        let beam = if c > 1e-3 && range < 6.0 {
+            Beam::new(bearing, range)
+        } else {
+            Beam::invalid(bearing)
+        };
+        scan.push(beam).unwrap();
+    }
+    crate::guidance::nearest_hits::NearestHits::of_scan(&scan)
+}
+
+#[test]
+fn a_setpoint_into_a_wall_the_flight_part_sees_is_not_flown() {
+    // The companion's commands come from its own frame; when that frame has gone wrong (a SLAM
+    // heading that slid while the autopilot refused its fixes) a velocity it guarded along a
+    // wall points, in the autopilot's frame, straight at it. The flight part sees the wall in
+    // its own scans and must keep r_min from it whatever it is asked.
+    let mut c = Companion::new();
+    let mut f = explore(21, &mut c);
+    let wall_x = f.veh.position_m.x + 1.2;
+    c.goal = Some(Goal::Velocity([0.5, 0.0]));
+    let r_min = MissionConfig::default().guard.r_min_m;
+    let mut closest = f32::INFINITY;
+    for _ in 0..40 {
+        let hits = wall_ahead(&f.veh, wall_x);
+        f.ap.observe_hits(hits);
+        fly(&mut f, &mut c, 0.2, |_, v| {
+            closest = closest.min(wall_x - v.position_m.x);
+        });
+    }
+    assert_eq!(f.out.mode, FlightMode::Explore);
+    assert!(
+        closest > r_min - 0.05,
+        "{closest} m from the wall, r_min {r_min} m"
+    );
+    assert!(f.ap.mission().counters().guarded_steps > 0);
+    // It went as near as the guard lets it, not stopped short.
+    assert!(closest < r_min + 0.1, "{closest} m from the wall");
+}

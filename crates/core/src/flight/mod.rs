@@ -8,6 +8,7 @@ pub mod mission;
 pub mod onboard;
 mod param_table;
 pub mod params;
+mod setpoint_guard;
 pub mod supervisor;
 #[cfg(test)]
 mod test_vehicle;

@@ -9,6 +9,7 @@
 use super::autopilot::{Autopilot, AutopilotConfig};
 use super::params::ParamError;
 use crate::geom::Pose2;
+use crate::guidance::nearest_hits::NearestHits;
 use crate::matching::{LidarOdometry, OdometryConfig, OdometryStep};
 use crate::msgs::{EstimatedState, Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
 use crate::scan::level::{Leveller, ScanPlane};
@@ -59,13 +60,15 @@ impl<const N: usize> Onboard<N> {
         self.rejected_points
     }
 
-    /// One step: match the scan if one completed, then run the autopilot. A scan-match result
-    /// already in `inputs` is replaced when a scan is given.
+    /// One step: match the scan if one completed, hand its nearest hits to the autopilot's
+    /// setpoint guard, then run the autopilot. A scan-match result already in `inputs` is
+    /// replaced when a scan is given.
     pub fn step(&mut self, inputs: &Inputs, scan: Option<&Scan<N>>, dt: f32) -> Outputs {
         // The inputs are copied (a library call each step) only when a scan's match goes in.
         let matched;
         let inputs = match scan {
             Some(scan) => {
+                self.autopilot.observe_hits(NearestHits::of_scan(scan));
                 matched = Inputs {
                     scan_match: Some(self.match_scan(inputs, scan)),
                     ..*inputs

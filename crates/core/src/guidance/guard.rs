@@ -1,6 +1,13 @@
 //! The last word on every command: limits the speed toward each hit so the vehicle slows
 //! exponentially as it nears `r_min` and never closes on it, whatever mode or rule produced
 //! the command. Safety-critical.
+//!
+//! The same rule ([`limit_approach`]) runs twice: in the guidance, on the companion's side, and
+//! in the flight part on the setpoint it is about to fly ([`super::nearest_hits`]). The
+//! guidance turns its guarded body-frame command into the world with the companion's pose,
+//! and the flight part flies it with its own estimate: when the two disagree (a SLAM heading
+//! gone wrong, a position setpoint placed by a SLAM pose the estimate no longer shares) what
+//! is flown is not what was guarded, and only the flight part's own check holds.
 
 use super::config::GuidanceConfig;
 use super::sweep::{usable, Sweep};
@@ -19,9 +26,35 @@ pub enum Guard {
     Stopped,
 }
 
+/// The guard's rule: the largest speed toward a hit at range `r` is
+/// `approach_rate · (r − r_min)`, at least 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ApproachLimit {
+    /// Closest a hit may come, m (vehicle radius plus margin).
+    pub r_min_m: f32,
+    /// Speed allowed toward a hit per metre of range beyond `r_min_m`, 1/s.
+    pub approach_rate_1_s: f32,
+}
+
+impl ApproachLimit {
+    /// Largest allowed speed toward a hit at `range_m`, m/s.
+    pub fn allowed_m_s(&self, range_m: f32) -> f32 {
+        (self.approach_rate_1_s * (range_m - self.r_min_m)).max(0.0)
+    }
+}
+
+impl From<&GuidanceConfig> for ApproachLimit {
+    fn from(cfg: &GuidanceConfig) -> Self {
+        Self {
+            r_min_m: cfg.r_min_m(),
+            approach_rate_1_s: cfg.approach_rate_1_s,
+        }
+    }
+}
+
 /// Largest allowed speed toward a hit at `range_m`, m/s: `approach_rate · (r − r_min)`, at least 0.
 pub fn allowed_approach_m_s(range_m: f32, cfg: &GuidanceConfig) -> f32 {
-    (cfg.approach_rate_1_s * (range_m - cfg.r_min_m())).max(0.0)
+    ApproachLimit::from(cfg).allowed_m_s(range_m)
 }
 
 /// Removes from `v` (sensor frame, m/s) what exceeds the allowed approach speed to any hit of
@@ -38,6 +71,16 @@ pub(super) fn guard_velocity<const N: usize, I: Iterator<Item = (Vec2, f32)>>(
             .map(|pos| (sweep.unit(pos), sweep.range_m(pos)))
             .chain(remembered())
     };
+    limit_approach(v, hits, &ApproachLimit::from(cfg))
+}
+
+/// Removes from `v` (m/s) what exceeds `limit`'s allowed approach speed to any of `hits` (unit
+/// direction and range, in the frame of `v`).
+pub fn limit_approach<I: Iterator<Item = (Vec2, f32)>>(
+    v: Vec2,
+    hits: impl Fn() -> I,
+    limit: &ApproachLimit,
+) -> (Vec2, Guard) {
     // Each correction only shortens `v`, so hits whose allowance exceeds the current speed can
     // never be violated and are skipped.
     let mut out = v;
@@ -45,13 +88,13 @@ pub(super) fn guard_velocity<const N: usize, I: Iterator<Item = (Vec2, f32)>>(
     for _ in 0..3 {
         let mut changed = false;
         for (u, range) in hits() {
-            let limit = allowed_approach_m_s(range, cfg);
-            if limit * limit >= out.norm_squared() {
+            let allowed = limit.allowed_m_s(range);
+            if allowed * allowed >= out.norm_squared() {
                 continue;
             }
             let toward = out.dot(u);
-            if toward > limit {
-                out = out - u * (toward - limit);
+            if toward > allowed {
+                out = out - u * (toward - allowed);
                 changed = true;
             }
         }
@@ -60,7 +103,7 @@ pub(super) fn guard_velocity<const N: usize, I: Iterator<Item = (Vec2, f32)>>(
             break;
         }
     }
-    if !respects(out, hits(), cfg) {
+    if !respects(out, hits(), limit) {
         return (Vec2::ZERO, Guard::Stopped);
     }
     let action = if touched {
@@ -78,15 +121,15 @@ pub fn respects_every_hit<const N: usize>(v: Vec2, scan: &Scan<N>, cfg: &Guidanc
     respects(
         v,
         hits.map(|b| (Vec2::new(cosf(b.angle_rad), sinf(b.angle_rad)), b.range_m)),
-        cfg,
+        &ApproachLimit::from(cfg),
     )
 }
 
-fn respects(v: Vec2, mut hits: impl Iterator<Item = (Vec2, f32)>, cfg: &GuidanceConfig) -> bool {
+fn respects(v: Vec2, mut hits: impl Iterator<Item = (Vec2, f32)>, limit: &ApproachLimit) -> bool {
     let speed = v.norm();
     hits.all(|(u, range)| {
-        let limit = allowed_approach_m_s(range, cfg);
-        limit >= speed || v.dot(u) <= limit + 1e-4
+        let allowed = limit.allowed_m_s(range);
+        allowed >= speed || v.dot(u) <= allowed + 1e-4
     })
 }
 

@@ -37,13 +37,14 @@ pub mod guard;
 pub mod heading;
 mod memory;
 pub mod movers;
+pub mod nearest_hits;
 pub mod prls;
 mod run;
 pub mod step;
 mod sweep;
 
 pub use config::{GuidanceConfig, GuidanceConfigError};
-pub use guard::Guard;
+pub use guard::{ApproachLimit, Guard};
 pub use heading::HeadingRule;
 pub use movers::Mover;
 pub use prls::{Gap, WallSegment, WallSegments};

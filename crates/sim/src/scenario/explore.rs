@@ -14,6 +14,7 @@ use crate::runner::companion::{AnyExploreCrew, CompanionLog, CompanionParts, Exp
 use crate::runner::onboard_link::{FlightLog, OnboardLink, Script, LARGE_SCAN_BEAMS, XV11_BEAMS};
 use crate::runner::{SetupError, SimConfig};
 use plumbline_core::guidance::config::GuidanceConfig;
+use plumbline_core::guidance::ApproachLimit;
 use plumbline_explore::{ExploreConfig, Explorer};
 use plumbline_slam::SlamConfig;
 use std::cell::RefCell;
@@ -83,7 +84,9 @@ fn crew<const N: usize>(
     config: &SimConfig,
     companion: CompanionParts,
 ) -> Result<(ExploreCrew<N>, Rc<RefCell<FlightLog>>), ScenarioError> {
-    let (odometry, autopilot) = onboard::stack(options, config)?;
+    let (odometry, mut autopilot) = onboard::stack(options, config)?;
+    // The flight part guards what it flies by the guidance's own rule.
+    autopilot.mission.guard = ApproachLimit::from(&companion.guidance);
     let script = Script::arm_at(ARM_AT_S);
     let (link, log) = OnboardLink::<N>::new(&config.lidar, odometry, autopilot, script)
         .map_err(ScenarioError::Setup)?;
