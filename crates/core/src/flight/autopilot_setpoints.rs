@@ -1,6 +1,6 @@
 //! What each flying mode asks of the cascade: the hold point, the companion's mission target
-//! (checked against the latest revolution, [`crate::flight::setpoint_guard`]), or a landing that holds
-//! only the axes the estimate still knows.
+//! (checked against the latest revolution, [`crate::flight::setpoint_guard`]), or a landing
+//! that holds only the axes the estimate still knows.
 
 use super::Autopilot;
 use crate::control::cascade::{CascadeSetpoint, FeedForward, Vertical};

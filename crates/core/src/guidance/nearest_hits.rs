@@ -23,6 +23,8 @@ const SECTOR_RAD: f32 = TAU / SECTORS as f32;
 pub struct NearestHits {
     /// Bearing (rad) and range (m) of the sector's nearest hit; range infinite without one.
     hits: [(f32, f32); SECTORS],
+    /// The nearest of them all, m (infinite without a hit).
+    nearest_m: f32,
 }
 
 impl Default for NearestHits {
@@ -30,6 +32,7 @@ impl Default for NearestHits {
     fn default() -> Self {
         Self {
             hits: [(0.0, f32::INFINITY); SECTORS],
+            nearest_m: f32::INFINITY,
         }
     }
 }
@@ -46,8 +49,15 @@ impl NearestHits {
             if b.range_m < slot.1 {
                 *slot = (b.angle_rad, b.range_m);
             }
+            out.nearest_m = out.nearest_m.min(b.range_m);
         }
         out
+    }
+
+    /// Range of the nearest hit, m (infinite without one): a command no faster than the
+    /// allowance at this range respects every hit, and needs no closer look.
+    pub fn nearest_m(&self) -> f32 {
+        self.nearest_m
     }
 
     /// Unit direction (body frame) and range of each sector's nearest hit.
@@ -81,5 +91,6 @@ mod tests {
             .any(|(u, r)| *r == 1.5 && (u.y - sinf(0.05)).abs() < 1e-6));
         assert!(hits.iter().any(|(u, r)| *r == 1.0 && u.y < 0.0));
         assert!(hits.iter().any(|(_, r)| *r == 4.0));
+        assert_eq!(NearestHits::of_scan(&scan).nearest_m(), 1.0);
     }
 }
