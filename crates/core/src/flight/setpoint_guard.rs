@@ -32,14 +32,15 @@ pub fn guard_target(
     let here = [e.position_m[0], e.position_m[1]];
     let axis = |i: usize| (gain * (target[i] - here[i])).clamp(-max_speed_m_s, max_speed_m_s);
     let (vx, vy) = (axis(0), axis(1));
-    // Most steps fly far from anything: slower than the nearest hit's allowance, every hit is
-    // respected (the guard would skip them all), at no more cost than this comparison.
-    if limit.allowed_m_s(hits.nearest_m()) >= libm::hypotf(vx, vy) {
+    // Only hits whose allowance is below the speed can bind (the guard skips the others):
+    // those nearer than `r_min + speed / rate`, a few at most, none on most steps.
+    let reach_m = limit.r_min_m + libm::sqrtf(vx * vx + vy * vy) / limit.approach_rate_1_s;
+    if hits.closer_than(reach_m).next().is_none() {
         return None;
     }
     let (s, c) = sincosf(e.yaw_rad);
     let body = Vec2::new(c * vx + s * vy, c * vy - s * vx);
-    let (safe, action) = limit_approach(body, || hits.iter(), limit);
+    let (safe, action) = limit_approach(body, || hits.closer_than(reach_m), limit);
     if action == Guard::Clear {
         return None;
     }
