@@ -35,9 +35,7 @@ pub fn guard_target(
     // Only hits whose allowance is below the speed can bind (the guard skips the others):
     // those nearer than `r_min + speed / rate`, a few at most, none on most steps.
     let reach_m = limit.r_min_m + libm::sqrtf(vx * vx + vy * vy) / limit.approach_rate_1_s;
-    if hits.closer_than(reach_m).next().is_none() {
-        return None;
-    }
+    hits.closer_than(reach_m).next()?;
     let (s, c) = sincosf(e.yaw_rad);
     let body = Vec2::new(c * vx + s * vy, c * vy - s * vx);
     let (safe, action) = limit_approach(body, || hits.closer_than(reach_m), limit);
