@@ -52,11 +52,6 @@ impl From<&GuidanceConfig> for ApproachLimit {
     }
 }
 
-/// Largest allowed speed toward a hit at `range_m`, m/s: `approach_rate · (r − r_min)`, at least 0.
-pub fn allowed_approach_m_s(range_m: f32, cfg: &GuidanceConfig) -> f32 {
-    ApproachLimit::from(cfg).allowed_m_s(range_m)
-}
-
 /// Removes from `v` (sensor frame, m/s) what exceeds the allowed approach speed to any hit of
 /// the sweep or any remembered one (`remembered` gives unit direction and range, body frame).
 pub(super) fn guard_velocity<const N: usize, I: Iterator<Item = (Vec2, f32)>>(
