@@ -108,8 +108,16 @@ impl<const N: usize> PreparedScan<N> {
             return None;
         }
         // Queries arrive in angular order, so a short walk from the last answer usually lands;
-        // a jump (a gap in the scan, an occlusion edge) falls back to bisection.
-        let mut k = hint.min(self.len);
+        // a jump (a gap in the scan, an occlusion edge) falls back to bisection. On sorted
+        // bearings both end where the bearing's place is, from any start, so the walk starts
+        // where evenly spaced beams would put it, which also lands after a jump. (Not for a
+        // NaN bearing, where the walk stops at once and bisection would say 0.)
+        let mut k = if self.sorted && !phi.is_nan() {
+            // At least 0 (`as` saturates), at most the end.
+            (((phi - b[0]) * 2.0 / self.margin) as usize).min(self.len)
+        } else {
+            hint.min(self.len)
+        };
         for _ in 0..8 {
             if k < self.len && b[k] < phi {
                 k += 1;
@@ -230,6 +238,50 @@ mod tests {
             let q = Vec2::new(qx as f32, qy as f32) * scale;
             for hint in 0..=p.len + 1 {
                 proptest::prop_assert_eq!(p.walk(q, hint), scalar_walk(&p, q, hint), "hint {}", hint);
+            }
+        }
+    }
+
+    /// [`PreparedScan::project_by_bearing`]'s search of bearings not known to be sorted: a walk
+    /// from the hint, or bisection.
+    fn search_from_hint<const N: usize>(
+        s: &PreparedScan<N>,
+        q: Vec2,
+        hint: usize,
+    ) -> Option<usize> {
+        let unknown = PreparedScan {
+            sorted: false,
+            ..s.clone()
+        };
+        unknown.project_by_bearing(q, hint)
+    }
+
+    proptest::proptest! {
+        /// Starting the search of sorted bearings where the bearing puts it lands where the
+        /// walk from the hint (or bisection) lands: over scans with gaps and ties, queries
+        /// anywhere (past the ends, at the sensor, NaN) and every hint.
+        #[test]
+        fn the_start_of_a_search_of_sorted_bearings_changes_no_answer(
+            beams in proptest::collection::vec((0.0f32..0.1, proptest::bool::weighted(0.7), 0.3f32..6.0), 1..64),
+            start in -3.5f32..0.0,
+            q in proptest::prop_oneof![
+                8 => (-7.0f32..7.0, -7.0f32..7.0),
+                1 => proptest::strategy::Just((0.0f32, 0.0f32)),
+                1 => proptest::strategy::Just((f32::NAN, 1.0f32)),
+            ],
+        ) {
+            let mut s: Scan<64> = Scan::new(0.0);
+            let mut a = start;
+            for &(step, valid, r) in &beams {
+                a += step;
+                s.push(if valid { Beam::new(a, r) } else { Beam::invalid(a) }).unwrap();
+            }
+            let mut p: PreparedScan<64> = PreparedScan::default();
+            p.load(&s).unwrap();
+            proptest::prop_assert!(p.sorted);
+            let q = Vec2::new(q.0, q.1);
+            for hint in 0..=p.len() + 1 {
+                proptest::prop_assert_eq!(p.project_by_bearing(q, hint), search_from_hint(&p, q, hint), "hint {}", hint);
             }
         }
     }

@@ -51,6 +51,9 @@ pub struct PreparedScan<const N: usize> {
     /// Two mean beam steps: how far outside the first and last beam a query still projects.
     pub(super) margin: f32,
     pub(super) has_lines: bool,
+    /// The bearings never decrease (as stored, not only as measured from the first), so the
+    /// place of a bearing among them is one whatever a search starts from.
+    pub(super) sorted: bool,
 }
 
 impl<const N: usize> Default for PreparedScan<N> {
@@ -63,6 +66,7 @@ impl<const N: usize> Default for PreparedScan<N> {
             full_circle: false,
             margin: 0.0,
             has_lines: false,
+            sorted: false,
         }
     }
 }
@@ -86,6 +90,8 @@ impl<const N: usize> PreparedScan<N> {
         } else {
             0.0
         };
+        let b = &self.bearings[..self.len];
+        self.sorted = b.windows(2).fold(true, |ok, w| ok & (w[1] >= w[0]));
         // Within 3 beam steps of a full turn: treat as a closed ring.
         self.full_circle = span + 3.0 * self.mean_step() >= TAU;
         self.margin = 2.0 * self.mean_step();
