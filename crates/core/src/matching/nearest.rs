@@ -145,6 +145,20 @@ impl<const N: usize> PreparedScan<N> {
         }
     }
 
+    /// Whether the point [`Self::nearest_in_window`] finds is within `r2` (squared) of `q`,
+    /// with the default window's search cut to that yes or no
+    /// ([`super::window::any_within_six`]).
+    #[inline(always)]
+    pub fn near_in_window(&self, q: Vec2, k: usize, half_window: usize, r2: f32) -> bool {
+        let six = super::window::six_around(&self.points[..self.len], k);
+        match six.filter(|_| half_window == 3) {
+            Some(window) => super::window::any_within_six(window, q, r2),
+            None => self
+                .nearest_in_pieces(q, k, half_window)
+                .is_some_and(|(_, d2)| d2 <= r2),
+        }
+    }
+
     /// [`Self::nearest_in_window`] for other window sizes and near an end of the scan: the part
     /// inside the scan and, on a full circle, the parts that wrap.
     #[inline(never)]

@@ -8,6 +8,7 @@
 
 use super::config::MatchConfig;
 use super::prepared::PreparedScan;
+use super::window::{any_within_six, usual_window};
 use crate::geom::{Pose2, Vec2};
 
 /// A box of candidate poses around a guess.
@@ -52,6 +53,10 @@ impl SearchBox {
 /// cannot lift it to the count it needs: above the best so far, and at least the guess's own
 /// count (the best is never below that, so a candidate short of it can never be the answer).
 /// The answer is the one a full count of every candidate gives.
+///
+/// Out of line: inlined, its frame (a heading's sine and cosine kept across all its
+/// translations) joined the match's, the deepest of the bare build's stack.
+#[inline(never)]
 pub fn best_pose<const N: usize>(
     reference: &PreparedScan<N>,
     current: &PreparedScan<N>,
@@ -69,24 +74,25 @@ pub fn best_pose<const N: usize>(
         r2: cfg.recovery_radius_m * cfg.recovery_radius_m,
         window: cfg.search_half_window as usize,
     };
-    // Heading unwrapped (the rotation is taken of it as it is) and translation.
-    let candidate = |k: i32, ix: i32, iy: i32| {
-        (
-            guess.theta + k as f32 * search.heading_step_rad,
-            Vec2::new(
-                guess.x + ix as f32 * search.translation_step_m,
-                guess.y + iy as f32 * search.translation_step_m,
-            ),
+    // Heading unwrapped (the rotation is taken of it as it is), turned into a sine and cosine
+    // once for all the translations tried with it, and translation.
+    let heading = |k: i32| guess.theta + k as f32 * search.heading_step_rad;
+    let turn = |theta: f32| (libm::sinf(theta), libm::cosf(theta));
+    let place = |ix: i32, iy: i32| {
+        Vec2::new(
+            guess.x + ix as f32 * search.translation_step_m,
+            guess.y + iy as f32 * search.translation_step_m,
         )
     };
-    let (theta, t) = candidate(0, 0, 0);
-    let floor = counter.hits(theta, t, 0);
+    let floor = counter.hits(turn(heading(0)), place(0, 0), 0);
     let mut best = (0usize, guess);
     for k in -nh..=nh {
+        let theta = heading(k);
+        let rotation = turn(theta);
         for ix in -nt..=nt {
             for iy in -nt..=nt {
-                let (theta, t) = candidate(k, ix, iy);
-                let hits = counter.hits(theta, t, (best.0 + 1).max(floor));
+                let t = place(ix, iy);
+                let hits = counter.hits(rotation, t, (best.0 + 1).max(floor));
                 if hits > best.0 && hits >= floor {
                     best = (hits, Pose2::new(t.x, t.y, theta));
                 }
@@ -107,12 +113,12 @@ struct HitCounter<'a, const N: usize> {
 }
 
 impl<const N: usize> HitCounter<'_, N> {
-    /// The count with the points turned by `theta` and moved by `t`, exact when it reaches
-    /// `need`; below `need` it may stop short (once the points left could not make up the
-    /// difference).
-    fn hits(&self, theta: f32, t: Vec2, need: usize) -> usize {
-        let (s, c) = (libm::sinf(theta), libm::cosf(theta));
+    /// The count with the points turned by `(sin, cos)` and moved by `t`, exact when it
+    /// reaches `need`; below `need` it may stop short (once the points left could not make up
+    /// the difference).
+    fn hits(&self, (s, c): (f32, f32), t: Vec2, need: usize) -> usize {
         let points = self.current.points();
+        let reference = self.reference.points();
         let mut left = points.len().div_ceil(self.stride);
         let mut hint = 0;
         let mut hits = 0;
@@ -122,17 +128,26 @@ impl<const N: usize> HitCounter<'_, N> {
             }
             left -= 1;
             let q = Vec2::new(c * p.x - s * p.y + t.x, s * p.x + c * p.y + t.y);
-            let Some(k) = self.reference.project(q, hint) else {
-                continue;
+            // Points a beam apart: the usual query in one go (the projection a step on, the
+            // window inside the scan), as the association passes make it. Else (and points
+            // some beams apart rarely project within a step) the general projection and search.
+            let usual = (self.window == 3 && self.stride == 1)
+                .then(|| usual_window(reference, q, hint))
+                .flatten();
+            let near = match usual {
+                Some((k, window)) => {
+                    hint = k;
+                    any_within_six(window, q, self.r2)
+                }
+                None => {
+                    let Some(k) = self.reference.project(q, hint) else {
+                        continue;
+                    };
+                    hint = k;
+                    self.reference.near_in_window(q, k, self.window, self.r2)
+                }
             };
-            hint = k;
-            if self
-                .reference
-                .nearest_in_window(q, k, self.window)
-                .is_some_and(|(_, d2)| d2 <= self.r2)
-            {
-                hits += 1;
-            }
+            hits += near as usize;
         }
         hits
     }

@@ -8,7 +8,7 @@
 //! compare against it (under 50).
 
 use crate::geom::Vec2;
-use wide::{f32x4, CmpEq, CmpGt};
+use wide::{f32x4, CmpEq, CmpGt, CmpLe};
 
 /// The cross and dot products of `before` and `at` with `q` (`[cross before, cross at, dot
 /// before, dot at]`, rounded exactly as [`Vec2::cross`] and [`Vec2::dot`] round them), and the
@@ -41,6 +41,14 @@ pub fn argmin(values: impl Iterator<Item = f32>) -> Option<(usize, f32)> {
 /// lies inside the scan, where `PreparedScan::nearest_in_window` answers `nearest`. `None`
 /// otherwise: ask those two. Spares the usual query their bounds checks and branches (about 50
 /// of its 130 instructions).
+#[inline(always)]
+pub fn usual_query(points: &[Vec2], q: Vec2, hint: usize) -> Option<(usize, Option<usize>)> {
+    usual_window(points, q, hint).map(|(k, window)| (k, nearest_around(window, k, q)))
+}
+
+/// The projection of [`usual_query`] and the default window around it: `Some((k, window))`
+/// when the projection's walk from `hint` stops within a step of `hint + 1`, so that
+/// `PreparedScan::project` answers `k`, and the six points around `k` lie inside the scan.
 ///
 /// The walk stops at `k` when point `k - 1` is below the bearing of `q`, point `k` is not, and
 /// both are within a quarter turn of `q` (`crosses_dots` mask `0b1101`), and it gets there
@@ -48,7 +56,7 @@ pub fn argmin(values: impl Iterator<Item = f32>) -> Option<(usize, f32)> {
 /// `k = hint` (the walk's first step does not move up: point `hint` is not below `q`), or when
 /// `k = hint + 2` (it moves up twice: points `hint` and `hint + 1` are below `q`).
 #[inline(always)]
-pub fn usual_query(points: &[Vec2], q: Vec2, hint: usize) -> Option<(usize, Option<usize>)> {
+pub fn usual_window(points: &[Vec2], q: Vec2, hint: usize) -> Option<(usize, &[Vec2; 6])> {
     let stop = |k: usize| {
         let window = six_around(points, k)?;
         let (_, positive) = crosses_dots(window[2], window[3], q);
@@ -56,13 +64,13 @@ pub fn usual_query(points: &[Vec2], q: Vec2, hint: usize) -> Option<(usize, Opti
     };
     let (positive, window) = stop(hint + 1)?;
     let k = match positive {
-        0b1101 => return Some((hint + 1, nearest_around(window, hint + 1, q))),
+        0b1101 => return Some((hint + 1, window)),
         m if m & 0b01 == 0 => hint,
         m if m & 0b11 == 0b11 => hint + 2,
         _ => return None,
     };
     let (positive, window) = stop(k)?;
-    (positive == 0b1101).then(|| (k, nearest_around(window, k, q)))
+    (positive == 0b1101).then_some((k, window))
 }
 
 /// The default search window around `k` (points `k - 3` to `k + 2`), when it lies inside
@@ -82,21 +90,7 @@ pub fn nearest_around(window: &[Vec2; 6], k: usize, q: Vec2) -> Option<usize> {
 /// distances rounded as `(p - q).norm_squared()` rounds them.
 #[inline(always)]
 pub fn nearest_of_six(window: &[Vec2; 6], q: Vec2) -> Option<(usize, f32)> {
-    let qq = f32x4::new([q.x, q.y, q.x, q.y]);
-    let squares = |a: Vec2, b: Vec2| {
-        let d = f32x4::new([a.x, a.y, b.x, b.y]) - qq;
-        (d * d).to_array()
-    };
-    let (s01, s23, s45) = (
-        squares(window[0], window[1]),
-        squares(window[2], window[3]),
-        squares(window[4], window[5]),
-    );
-    // x² + y² of two points from each of two vectors.
-    let sums = |a: [f32; 4], b: [f32; 4]| {
-        f32x4::new([a[0], a[2], b[0], b[2]]) + f32x4::new([a[1], a[3], b[1], b[3]])
-    };
-    let (low, high) = (sums(s01, s23), sums(s23, s45));
+    let (low, high) = six_squares(window, q);
     // A lanewise minimum may pass over a smaller distance next to a NaN (a NaN only comes from
     // a NaN coordinate: the sum of squares is never infinity minus infinity). Never in a
     // matcher's scans, but the rule is the rule.
@@ -116,6 +110,40 @@ pub fn nearest_of_six(window: &[Vec2; 6], q: Vec2) -> Option<(usize, f32)> {
     // Points 2 and 3 are in both vectors; either vote finds them first.
     let hits = low.cmp_eq(at).move_mask() | (high.cmp_eq(at).move_mask() << 2);
     Some((hits.trailing_zeros() as usize, d2))
+}
+
+/// Whether the point of `window` nearest to `q` by [`nearest_of_six`] is within `r2`
+/// (squared), without finding it: whether any of the six squared distances, rounded as
+/// [`nearest_of_six`] rounds them, is finite and at most `r2`. The least of them is at most
+/// `r2` exactly when one of them is, and a NaN distance, which that search passes over, fails
+/// the comparison. About half the work of the search, which a count of hits does not need.
+#[inline(always)]
+pub fn any_within_six(window: &[Vec2; 6], q: Vec2, r2: f32) -> bool {
+    // A search that finds nothing finite says no even to an infinite radius.
+    let r2 = f32x4::splat(if r2 == f32::INFINITY { f32::MAX } else { r2 });
+    let (low, high) = six_squares(window, q);
+    (low.cmp_le(r2) | high.cmp_le(r2)).move_mask() != 0
+}
+
+/// The squared distances from `q` of the points of `window`, rounded as
+/// `(p - q).norm_squared()` rounds them: points 0-3 and points 2-5.
+#[inline(always)]
+fn six_squares(window: &[Vec2; 6], q: Vec2) -> (f32x4, f32x4) {
+    let qq = f32x4::new([q.x, q.y, q.x, q.y]);
+    let squares = |a: Vec2, b: Vec2| {
+        let d = f32x4::new([a.x, a.y, b.x, b.y]) - qq;
+        (d * d).to_array()
+    };
+    let (s01, s23, s45) = (
+        squares(window[0], window[1]),
+        squares(window[2], window[3]),
+        squares(window[4], window[5]),
+    );
+    // x² + y² of two points from each of two vectors.
+    let sums = |a: [f32; 4], b: [f32; 4]| {
+        f32x4::new([a[0], a[2], b[0], b[2]]) + f32x4::new([a[1], a[3], b[1], b[3]])
+    };
+    (sums(s01, s23), sums(s23, s45))
 }
 
 #[cfg(test)]
@@ -145,6 +173,22 @@ mod tests {
             let lanes = nearest_of_six(&window, q);
             let scalar = argmin(window.iter().map(|p| (*p - q).norm_squared()));
             prop_assert_eq!(lanes.map(|(j, d)| (j, d.to_bits())), scalar.map(|(j, d)| (j, d.to_bits())));
+        }
+    }
+
+    proptest! {
+        /// The yes or no of a count of hits is the search's answer compared with the radius:
+        /// over NaN, infinite and overflowing distances and radii of zero, NaN and infinity.
+        #[test]
+        fn any_within_answers_as_the_nearest_compared(
+            xy in proptest::collection::vec((coordinate(), coordinate()), 6),
+            qx in coordinate(), qy in coordinate(),
+            r2 in prop_oneof![4 => 0.0f32..50.0, 1 => Just(0.0f32), 1 => Just(f32::INFINITY), 1 => Just(f32::NAN)],
+        ) {
+            let window: [Vec2; 6] = core::array::from_fn(|j| Vec2::new(xy[j].0, xy[j].1));
+            let q = Vec2::new(qx, qy);
+            let searched = nearest_of_six(&window, q).is_some_and(|(_, d2)| d2 <= r2);
+            prop_assert_eq!(any_within_six(&window, q, r2), searched);
         }
     }
 
