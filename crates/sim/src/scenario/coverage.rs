@@ -144,8 +144,8 @@ impl Coverage {
             let d = Vec3::new(a.cos(), a.sin(), 0.0);
             let reach = self
                 .scene
-                .cast(o, d, scan.max_range_m, &[])
-                .map_or(scan.max_range_m, |h| h.range_m);
+                .wall_range(o, d, scan.max_range_m)
+                .map_or(scan.max_range_m, |t| t);
             self.mark_ray([o.x, o.y], [d.x, d.y], reach);
         }
         self.series.push((scan.stamp_s, self.fraction()));

@@ -38,6 +38,8 @@ pub struct Scene {
     /// Compressed lists: walls of cell c are `items[starts[c]..starts[c + 1]]`.
     starts: Vec<u32>,
     items: Vec<u32>,
+    /// `edges[k]` is wall `items[k]`, laid out in cell order for the ray walk.
+    edges: Vec<Edge>,
 }
 
 impl Scene {
@@ -80,6 +82,10 @@ impl Scene {
             items.extend_from_slice(l);
             starts.push(items.len() as u32);
         }
+        let edges = items
+            .iter()
+            .map(|&i| Edge::of(&world.walls[i as usize]))
+            .collect();
         Self {
             walls: world.walls.clone(),
             ceiling_m: world.ceiling_m,
@@ -89,6 +95,7 @@ impl Scene {
             ny,
             starts,
             items,
+            edges,
         }
     }
 
@@ -146,26 +153,49 @@ impl Scene {
 
     /// The nearest wall closer than `limit` along the ray, walking the grid.
     fn cast_walls(&self, o: Vec3, d: Vec3, limit: f64) -> Option<Hit> {
+        self.nearest_wall(o, d, limit)
+            .map(|(k, t)| self.edges[k].hit(d, t))
+    }
+
+    /// The distance along the ray to the nearest wall closer than `limit`: [`Scene::cast`]'s
+    /// range for a level ray (which meets neither floor nor ceiling) among no people, without
+    /// the angle of incidence.
+    pub(crate) fn wall_range(&self, o: Vec3, d: Vec3, limit: f64) -> Option<f64> {
+        self.nearest_wall(o, d, limit).map(|(_, t)| t)
+    }
+
+    /// The nearest wall closer than `limit` along the ray (as its place in `edges`) and its
+    /// distance, walking the grid.
+    #[inline(always)]
+    fn nearest_wall(&self, o: Vec3, d: Vec3, limit: f64) -> Option<(usize, f64)> {
         let cell = self.cell_m;
         let (gx, gy) = ((o.x - self.origin[0]) / cell, (o.y - self.origin[1]) / cell);
-        // Clip the ray to the grid rectangle (slab test) so rays from outside still work.
         let (w, h) = (self.nx as f64, self.ny as f64);
-        let (mut t0, mut t1) = (0.0f64, limit);
-        for (p, v, n) in [(gx, d.x / cell, w), (gy, d.y / cell, h)] {
-            if v == 0.0 {
-                if p < 0.0 || p >= n {
-                    return None;
+        // A ray from inside the grid (every sensor's) walks from its own cell until it leaves
+        // the grid; one from outside is first clipped to the grid rectangle (slab test). The
+        // grid's border cells hold no walls, so the inside walk ending one cell later, where
+        // rounding puts the exit, changes nothing.
+        let inside = gx >= 0.0 && gy >= 0.0 && gx < w && gy < h;
+        let (start, t1) = if inside {
+            ([gx, gy], limit)
+        } else {
+            let (mut t0, mut t1) = (0.0f64, limit);
+            for (p, v, n) in [(gx, d.x / cell, w), (gy, d.y / cell, h)] {
+                if v == 0.0 {
+                    if p < 0.0 || p >= n {
+                        return None;
+                    }
+                } else {
+                    let (a, b) = ((0.0 - p) / v, (n - p) / v);
+                    t0 = t0.max(a.min(b));
+                    t1 = t1.min(a.max(b));
                 }
-            } else {
-                let (a, b) = ((0.0 - p) / v, (n - p) / v);
-                t0 = t0.max(a.min(b));
-                t1 = t1.min(a.max(b));
             }
-        }
-        if t0 > t1 {
-            return None;
-        }
-        let start = [gx + d.x / cell * t0, gy + d.y / cell * t0];
+            if t0 > t1 {
+                return None;
+            }
+            ([gx + d.x / cell * t0, gy + d.y / cell * t0], t1)
+        };
         // Clamped non-negative first, so truncation is floor (and needs no libm call).
         let mut cx = (start[0].max(0.0) as usize).min(self.nx - 1);
         let mut cy = (start[1].max(0.0) as usize).min(self.ny - 1);
@@ -182,14 +212,14 @@ impl Scene {
         let (sy, mut next_y, dty) = axis(gy, d.y / cell, cy);
         let mut best: Option<usize> = None;
         let mut best_t = limit;
-        let found = |best: Option<usize>, t: f64| best.map(|i| wall_hit(&self.walls[i], d, t));
+        let found = |best: Option<usize>, t: f64| best.map(|i| (i, t));
         loop {
             let c = cy * self.nx + cx;
-            for &i in &self.items[self.starts[c] as usize..self.starts[c + 1] as usize] {
-                if let Some(t) = hit_segment(o, d, &self.walls[i as usize]) {
+            for k in self.starts[c] as usize..self.starts[c + 1] as usize {
+                if let Some(t) = self.edges[k].cross(o, d) {
                     if t < best_t {
                         best_t = t;
-                        best = Some(i as usize);
+                        best = Some(k);
                     }
                 }
             }
@@ -277,31 +307,61 @@ impl Scene {
     }
 }
 
-/// What a ray along `d` meets when it hits wall `s` at distance `t`.
-pub(crate) fn wall_hit(s: &Segment, d: Vec3, t: f64) -> Hit {
-    let (ex, ey) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
-    Hit {
-        range_m: t,
-        cos_incidence: (d.x * ey - d.y * ex).abs() / (ex * ex + ey * ey).sqrt(),
+/// A wall as the ray tests take it: one end and the vector to the other, worked out once
+/// rather than for every ray that tests it (the same values, so the same results).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Edge {
+    a: [f64; 2],
+    e: [f64; 2],
+}
+
+impl Edge {
+    pub(crate) fn of(s: &Segment) -> Self {
+        Self {
+            a: s.a,
+            e: [s.b[0] - s.a[0], s.b[1] - s.a[1]],
+        }
+    }
+
+    /// What a ray along `d` meets when it hits this wall at distance `t`.
+    #[inline(always)]
+    fn hit(&self, d: Vec3, t: f64) -> Hit {
+        let [ex, ey] = self.e;
+        Hit {
+            range_m: t,
+            cos_incidence: (d.x * ey - d.y * ex).abs() / (ex * ex + ey * ey).sqrt(),
+        }
+    }
+
+    /// Ray (3-D, walls are vertical) against this wall: distance along the ray.
+    #[inline(always)]
+    fn cross(&self, o: Vec3, d: Vec3) -> Option<f64> {
+        let [ex, ey] = self.e;
+        let denom = d.x * ey - d.y * ex;
+        let (ax, ay) = (self.a[0] - o.x, self.a[1] - o.y);
+        // t = t_num / denom must be >= 0 and u = u_num / denom in [0, 1]: compared by sign so
+        // that the one division happens only for actual hits (this is the inner loop of every
+        // beam). All three are multiplied by the sign of denom (exact) and the tests are
+        // combined without short-circuit: which side a wall faces is a coin toss per beam, and
+        // branching on it was mispredicted about half the time.
+        let t_num = ax * ey - ay * ex;
+        let u_num = ax * d.y - ay * d.x;
+        let sign = 1.0f64.copysign(denom);
+        let (t, u, den) = (t_num * sign, u_num * sign, denom * sign);
+        let hit = (den > 0.0) & (t >= 0.0) & (u >= 0.0) & (u <= den);
+        hit.then(|| t_num / denom)
     }
 }
 
+/// What a ray along `d` meets when it hits wall `s` at distance `t`.
+pub(crate) fn wall_hit(s: &Segment, d: Vec3, t: f64) -> Hit {
+    Edge::of(s).hit(d, t)
+}
+
 /// Ray (3-D, walls are vertical) against a wall segment: distance along the ray.
+#[inline(always)]
 pub(crate) fn hit_segment(o: Vec3, d: Vec3, s: &Segment) -> Option<f64> {
-    let (ex, ey) = (s.b[0] - s.a[0], s.b[1] - s.a[1]);
-    let denom = d.x * ey - d.y * ex;
-    let (ax, ay) = (s.a[0] - o.x, s.a[1] - o.y);
-    // t = t_num / denom must be >= 0 and u = u_num / denom in [0, 1]: compared by sign so that
-    // the one division happens only for actual hits (this is the inner loop of every beam).
-    // All three are multiplied by the sign of denom (exact) and the tests are combined without
-    // short-circuit: which side a wall faces is a coin toss per beam, and branching on it was
-    // mispredicted about half the time.
-    let t_num = ax * ey - ay * ex;
-    let u_num = ax * d.y - ay * d.x;
-    let sign = 1.0f64.copysign(denom);
-    let (t, u, den) = (t_num * sign, u_num * sign, denom * sign);
-    let hit = (den > 0.0) & (t >= 0.0) & (u >= 0.0) & (u <= den);
-    hit.then(|| t_num / denom)
+    Edge::of(s).cross(o, d)
 }
 
 /// Ray against a vertical cylinder standing on the floor.
@@ -479,6 +539,35 @@ mod tests {
                 (None, None) => {}
                 other => prop_assert!(false, "{other:?}"),
             }
+        }
+
+        /// Rays from outside the grid are clipped to it first; those from inside skip that.
+        #[test]
+        fn rays_from_outside_agree_with_brute_force(
+            ox in -10.0f64..16.0, oy in -10.0f64..14.0, oz in 0.1f64..2.4,
+            yaw in -3.2f64..3.2, tilt in -0.3f64..0.3, max in 0.5f64..30.0,
+        ) {
+            let (w, s) = room();
+            let o = Vec3::new(ox, oy, oz);
+            let d = Vec3::new(tilt.cos() * yaw.cos(), tilt.cos() * yaw.sin(), tilt.sin());
+            let got = s.cast(o, d, max, &[]).map(|h| h.range_m);
+            let want = reference(&w, o, d, max);
+            match (got, want) {
+                (Some(a), Some(b)) => prop_assert!((a - b).abs() < 1e-9, "{a} vs {b}"),
+                (None, None) => {}
+                other => prop_assert!(false, "{other:?}"),
+            }
+        }
+
+        /// The coverage's level rays: the same range as a full cast, to the bit.
+        #[test]
+        fn wall_range_is_the_range_of_a_level_cast(
+            ox in 0.5f64..19.5, oy in 0.5f64..9.5, yaw in -3.2f64..3.2, max in 0.5f64..30.0,
+        ) {
+            let s = Scene::new(&World::shipped("office").unwrap().unwrap());
+            let o = Vec3::new(ox, oy, 1.0);
+            let d = Vec3::new(yaw.cos(), yaw.sin(), 0.0);
+            prop_assert_eq!(s.wall_range(o, d, max), s.cast(o, d, max, &[]).map(|h| h.range_m));
         }
 
         #[test]
