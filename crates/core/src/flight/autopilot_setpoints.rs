@@ -5,7 +5,7 @@
 use super::Autopilot;
 use crate::control::cascade::{CascadeSetpoint, FeedForward, Vertical};
 use crate::estimate::validity::Horizontal;
-use crate::flight::setpoint_guard::guard_target;
+use crate::flight::setpoint_guard::{guard_target, Loops};
 use crate::msgs::{EstimatedState, FailsafeReason, FlightMode, MissionSetpoint, PositionSetpoint};
 
 impl Autopilot {
@@ -66,9 +66,20 @@ impl Autopilot {
                 let [x, y, yaw_rad] = self.mission.target(t_s, &frame, e, loop_xy.kp, lidar_lost);
                 let mut target = [x, y];
                 let limit = self.config.mission.guard;
-                let guarded = self.nearest_hits.as_ref().and_then(|hits| {
-                    guard_target(target, e, hits, &limit, loop_xy.kp, loop_xy.output_limit)
-                });
+                let velocity_kp = self.config.cascade.velocity_xy.kp;
+                let loops = Loops {
+                    gain_1_s: loop_xy.kp,
+                    max_speed_m_s: loop_xy.output_limit,
+                    response_s: if velocity_kp > 0.0 {
+                        1.0 / velocity_kp
+                    } else {
+                        0.0
+                    },
+                };
+                let guarded = self
+                    .nearest_hits
+                    .as_ref()
+                    .and_then(|hits| guard_target(target, e, hits, &limit, &loops));
                 if let Some(g) = guarded {
                     self.mission.count_guarded();
                     target = g;
