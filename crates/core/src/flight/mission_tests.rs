@@ -549,8 +549,9 @@ fn a_setpoint_into_a_wall_the_flight_part_sees_is_not_flown() {
         });
     }
     assert_eq!(f.out.mode, FlightMode::Explore);
+    // Not even the velocity loop's lag carries it inside r_min (a millimetre for rounding).
     assert!(
-        closest > r_min - 0.05,
+        closest > r_min - 0.001,
         "{closest} m from the wall, r_min {r_min} m"
     );
     assert!(f.ap.mission().counters().guarded_steps > 0);
