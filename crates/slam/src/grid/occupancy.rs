@@ -362,7 +362,7 @@ impl OccupancyGrid {
                     let row = offset_in_tile(Cell::new(0, j));
                     out.extend((i..=end).map(|i| {
                         let k = row + (i & (TILE as i32 - 1)) as usize;
-                        self.state_of(Cell::new(i, j), tile.hits[k], tile.misses[k])
+                        self.state_of(Cell::new(i, j), tile.cells[k].hits, tile.cells[k].misses)
                     }));
                 }
             }
@@ -379,7 +379,7 @@ impl OccupancyGrid {
     pub fn occupied_cells(&self) -> impl Iterator<Item = Cell> + '_ {
         self.tiles.iter().flat_map(move |(corner, tile)| {
             (0..TILE * TILE)
-                .map(move |k| (cell_at(corner, k), tile.hits[k], tile.misses[k]))
+                .map(move |k| (cell_at(corner, k), tile.cells[k].hits, tile.cells[k].misses))
                 .filter(move |&(c, h, m)| self.state_of(c, h, m) == CellState::Occupied)
                 .map(|(c, _, _)| c)
         })

@@ -47,9 +47,9 @@ impl Candidates {
         };
         for (slot, corner, tile) in tiles.iter_slots() {
             let mut rows = [0u64; TILE];
-            for (row, counts) in rows.iter_mut().zip(tile.hits.chunks_exact(TILE)) {
-                for (i, h) in counts.iter().enumerate() {
-                    *row |= u64::from(c.hits.contains(h)) << i;
+            for (row, counts) in rows.iter_mut().zip(tile.cells.chunks_exact(TILE)) {
+                for (i, n) in counts.iter().enumerate() {
+                    *row |= u64::from(c.hits.contains(&n.hits)) << i;
                 }
             }
             if rows.iter().all(|&r| r == 0) {
