@@ -279,21 +279,42 @@ impl Tiles {
         } else if end_too {
             self.add_miss(to);
         }
-        let is_solid =
-            |tiles: &Tiles, i: i32, j: i32| u32::from(tiles.counts(Cell::new(i, j)).0) >= threshold;
         let across_step = (major_step.1.abs(), major_step.0.abs());
         for &(t, c) in solid.iter() {
             if t == major && !end_too {
                 continue;
             }
-            let pair = |(di, dj): (i32, i32)| {
-                usize::from(is_solid(self, c.i + di, c.j + dj))
-                    + usize::from(is_solid(self, c.i - di, c.j - dj))
-            };
-            if pair(major_step) <= pair(across_step) {
+            let (along, across) = self.solid_beside(c, major_step, across_step, threshold);
+            if along <= across {
                 self.add_miss(c);
             }
         }
+    }
+
+    /// How many of the two cells beside `c` one step `a` away (either way) hold at least
+    /// `threshold` hits, and how many of the two one step `b` away. The four lie in `c`'s own
+    /// tile unless `c` is on its edge, and are then read from it with one lookup.
+    fn solid_beside(
+        &self,
+        c: Cell,
+        a: (i32, i32),
+        b: (i32, i32),
+        threshold: u32,
+    ) -> (usize, usize) {
+        let inner = |v: i32| (1..TILE_MASK).contains(&(v & TILE_MASK));
+        if let (true, true, Some(tile)) = (inner(c.i), inner(c.j), self.tile_at(c)) {
+            let k = offset_in_tile(c) as isize;
+            let solid = |di: i32, dj: i32| {
+                let o = k + di as isize + dj as isize * TILE as isize;
+                usize::from(u32::from(tile.cells[o as usize].hits) >= threshold)
+            };
+            let pair = |(di, dj): (i32, i32)| solid(di, dj) + solid(-di, -dj);
+            return (pair(a), pair(b));
+        }
+        let solid =
+            |i: i32, j: i32| usize::from(u32::from(self.counts(Cell::new(i, j)).0) >= threshold);
+        let pair = |(di, dj): (i32, i32)| solid(c.i + di, c.j + dj) + solid(c.i - di, c.j - dj);
+        (pair(a), pair(b))
     }
 
     /// Allocates every tile the line from `from` to `to` passes through (the cells of
@@ -451,6 +472,41 @@ mod tests {
                 }
             }
         }
+    }
+
+    proptest! {
+        /// The surface rule's count of solid cells beside a cell is the same whether the four
+        /// are read from the cell's own tile or looked up one by one, at tile edges and
+        /// corners too.
+        #[test]
+        fn cells_beside_read_alike_inside_a_tile_and_across_its_edges(
+            hits in prop::collection::vec((near_edges(), near_edges(), 1u16..6), 1..60),
+            pick in 0usize..60,
+            steep in any::<bool>(),
+            sign in prop::sample::select(vec![-1i32, 1]),
+        ) {
+            let mut t = Tiles::default();
+            t.cover(CellRect { min: Cell::new(-71, -71), max: Cell::new(71, 71) });
+            for &(i, j, n) in &hits {
+                (0..n).for_each(|_| t.add_hit(Cell::new(i, j)));
+            }
+            let (i, j, _) = hits[pick % hits.len()];
+            let c = Cell::new(i, j);
+            let a = if steep { (0, sign) } else { (sign, 0) };
+            let b = (a.1.abs(), a.0.abs());
+            let one_by_one = |(di, dj): (i32, i32)| {
+                [1, -1]
+                    .iter()
+                    .filter(|&&s| t.counts(Cell::new(c.i + s * di, c.j + s * dj)).0 >= 3)
+                    .count()
+            };
+            prop_assert_eq!(t.solid_beside(c, a, b, 3), (one_by_one(a), one_by_one(b)));
+        }
+    }
+
+    /// Coordinates on both sides of tile edges, so that cells beside each other crowd there.
+    fn near_edges() -> impl Strategy<Value = i32> {
+        prop::sample::select(vec![-66, -65, -64, -63, -2, -1, 0, 1, 2, 62, 63, 64, 65])
     }
 
     #[test]
