@@ -520,6 +520,27 @@ mod tests {
         }
     }
 
+    /// A ray from `o` at `yaw` and `tilt` (rad) finds the wall a test of every wall finds, at
+    /// the same range.
+    fn agrees_with_brute_force(
+        w: &World,
+        s: &Scene,
+        o: Vec3,
+        yaw: f64,
+        tilt: f64,
+        max: f64,
+    ) -> Result<(), TestCaseError> {
+        let d = Vec3::new(tilt.cos() * yaw.cos(), tilt.cos() * yaw.sin(), tilt.sin());
+        let got = s.cast(o, d, max, &[]).map(|h| h.range_m);
+        let want = reference(w, o, d, max);
+        match (got, want) {
+            (Some(a), Some(b)) => prop_assert!((a - b).abs() < 1e-9, "{a} vs {b}"),
+            (None, None) => {}
+            other => prop_assert!(false, "{other:?}"),
+        }
+        Ok(())
+    }
+
     proptest! {
         #[test]
         fn grid_traversal_agrees_with_brute_force(
@@ -529,16 +550,7 @@ mod tests {
         ) {
             let text = format!("start 1 1 0\nceiling 2.5\noutline 0 0 6 0 6 4 0 4\nwall {bx} {by} {} {}\nwall 2 0.5 2.7 3.1\n", bx + 0.7, by + 0.3);
             let w = World::parse(&text).unwrap();
-            let s = Scene::new(&w);
-            let o = Vec3::new(ox, oy, oz);
-            let d = Vec3::new(tilt.cos() * yaw.cos(), tilt.cos() * yaw.sin(), tilt.sin());
-            let got = s.cast(o, d, max, &[]).map(|h| h.range_m);
-            let want = reference(&w, o, d, max);
-            match (got, want) {
-                (Some(a), Some(b)) => prop_assert!((a - b).abs() < 1e-9, "{a} vs {b}"),
-                (None, None) => {}
-                other => prop_assert!(false, "{other:?}"),
-            }
+            agrees_with_brute_force(&w, &Scene::new(&w), Vec3::new(ox, oy, oz), yaw, tilt, max)?;
         }
 
         /// Rays from outside the grid are clipped to it first; those from inside skip that.
@@ -548,15 +560,7 @@ mod tests {
             yaw in -3.2f64..3.2, tilt in -0.3f64..0.3, max in 0.5f64..30.0,
         ) {
             let (w, s) = room();
-            let o = Vec3::new(ox, oy, oz);
-            let d = Vec3::new(tilt.cos() * yaw.cos(), tilt.cos() * yaw.sin(), tilt.sin());
-            let got = s.cast(o, d, max, &[]).map(|h| h.range_m);
-            let want = reference(&w, o, d, max);
-            match (got, want) {
-                (Some(a), Some(b)) => prop_assert!((a - b).abs() < 1e-9, "{a} vs {b}"),
-                (None, None) => {}
-                other => prop_assert!(false, "{other:?}"),
-            }
+            agrees_with_brute_force(&w, &s, Vec3::new(ox, oy, oz), yaw, tilt, max)?;
         }
 
         /// The coverage's level rays: the same range as a full cast, to the bit.
