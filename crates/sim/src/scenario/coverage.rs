@@ -145,7 +145,7 @@ impl Coverage {
             let reach = self
                 .scene
                 .wall_range(o, d, scan.max_range_m)
-                .map_or(scan.max_range_m, |t| t);
+                .unwrap_or(scan.max_range_m);
             self.mark_ray([o.x, o.y], [d.x, d.y], reach);
         }
         self.series.push((scan.stamp_s, self.fraction()));
