@@ -5,7 +5,8 @@
 # relation survives thinning only if both its scans do, about 1 in k², so MIT every 8th keeps
 # 1-5), the position error against the full-rate SLAM trajectory at the same stamps after the
 # best rigid fit (RMS and largest, m: this one sees a divergence whatever relations survive),
-# and what the run reported about being lost (and the wide searches the local map contradicted).
+# the steps between kept scans that differ from the full-rate path's (where it went wrong
+# first, and how: a heading off, or a step cut short along a corridor), and what the run reported about being lost (and the wide searches the local map contradicted).
 #   bash scripts/slam_phases.sh            (BIN=path/to/plumbline to measure another binary)
 #   JOBS=2 runs two phases at a time.
 set -euo pipefail
@@ -36,11 +37,27 @@ import json, math, sys
 name, s = sys.argv[1], json.loads(sys.argv[2])
 e = json.loads(sys.argv[3]) if sys.argv[3] else {}
 def load(path):
-    return {round(float(l.split()[0]), 4): tuple(map(float, l.split()[1:3]))
+    return {round(float(l.split()[0]), 4): tuple(map(float, l.split()[1:4]))
             for l in open(path) if l.strip() and not l.startswith("#")}
 full, thin = load(sys.argv[4]), load(sys.argv[5])
-stamps = [t for t in thin if t in full]
-a = [full[t] for t in stamps]; b = [thin[t] for t in stamps]
+stamps = sorted(t for t in thin if t in full)
+a = [full[t][:2] for t in stamps]; b = [thin[t][:2] for t in stamps]
+def between(p, q):  # q in p's frame
+    c, s = math.cos(p[2]), math.sin(p[2])
+    dx, dy = q[0] - p[0], q[1] - p[1]
+    return c*dx + s*dy, -s*dx + c*dy, math.remainder(q[2] - p[2], math.tau)
+# Each step between kept scans against the full-rate path's: wrong when off by more than
+# 0.3 m or 0.1 rad; "turned" when the heading is off, "short" when only the length falls short
+# (a slide back along a corridor), and when the first wrong step came (s from the start).
+wrong, turned, short, first = 0, 0, 0, "-"
+for p, q in zip(stamps, stamps[1:]):
+    f, h = between(full[p], full[q]), between(thin[p], thin[q])
+    off_m, off_rad = math.hypot(f[0]-h[0], f[1]-h[1]), abs(math.remainder(f[2]-h[2], math.tau))
+    if off_m > 0.3 or off_rad > 0.1:
+        wrong += 1
+        turned += off_rad > 0.1
+        short += off_rad <= 0.1 and math.hypot(h[0], h[1]) < math.hypot(f[0], f[1]) - 0.3
+        first = first if wrong > 1 else f"{q - stamps[0]:.1f}"
 ma = [sum(p[i] for p in a) / len(a) for i in (0, 1)]
 mb = [sum(p[i] for p in b) / len(b) for i in (0, 1)]
 # The rotation that best lays the thinned path on the full-rate one (2-D Procrustes).
@@ -53,6 +70,8 @@ rms = math.sqrt(sum(x*x for x in err) / len(err))
 rel = f"{e['trans_mean_m']:.4f}" if e.get("matched") else "-"
 print("\t".join([name, f"trans_mean_m={rel}", f"matched={e.get('matched', 0)}",
                  f"rms_vs_full_m={rms:.3f}", f"max_vs_full_m={max(err):.2f}",
+                 f"wrong_steps={wrong}/{len(stamps) - 1}", f"turned={turned}", f"short={short}",
+                 f"first_wrong_s={first}",
                  f"predicted_scans={s['predicted_scans']}", f"lost_s={s['lost_s']:.1f}",
                  f"relocalizations={s['relocalizations']}",
                  f"relocalizations_unconfirmed={s.get('relocalizations_unconfirmed', '-')}"]))
