@@ -375,7 +375,7 @@ impl Explorer {
         );
         window.block(&self.blocked, config.blocked_radius_m);
         let mut plan = nearest_frontier(&window, p, &config, &self.given_up);
-        let whole_map = plan.is_none();
+        let whole_map = !matches!(plan, Planned::To(..));
         if whole_map {
             self.stats.full_map_plans += 1;
             let given_up = std::mem::take(&mut self.given_up);
@@ -383,7 +383,7 @@ impl Explorer {
             self.given_up = given_up;
         }
         match plan {
-            Some((goal, path)) => {
+            Planned::To(goal, path) => {
                 let pursued_since_s = match &self.plan {
                     Some(old) if (old.goal - goal).norm() <= config.unreachable_radius_m => {
                         old.pursued_since_s
@@ -401,7 +401,13 @@ impl Explorer {
                 self.no_frontier_since = None;
                 self.last_empty = None;
             }
-            None => {
+            Planned::Unmapped => {
+                // The map has not caught up with the vehicle (a keyframe still to be drawn
+                // after it flew into space it saw no return from): that says nothing about the
+                // frontiers. The old plan, if any, is flown on until the map covers the vehicle.
+                self.last_empty = Some((now, version));
+            }
+            Planned::NoFrontier => {
                 self.plan = None;
                 self.last_empty = Some((now, version));
                 let since = *self.no_frontier_since.get_or_insert(now);
@@ -413,14 +419,20 @@ impl Explorer {
     }
 }
 
+/// What a search for the nearest frontier found.
+enum Planned {
+    /// The goal and the path to it.
+    To(Vec2, Path),
+    /// No frontier the vehicle can reach.
+    NoFrontier,
+    /// No safe cell to start from: the vehicle stands where the map is not drawn (or is boxed
+    /// in by what it shows).
+    Unmapped,
+}
+
 /// The nearest frontier cell by path over `g` from `p` that belongs to a cluster big enough
 /// and lies clear of every goal given up, with the path to it.
-fn nearest_frontier(
-    g: &PlanGrid,
-    p: Vec2,
-    config: &ExploreConfig,
-    given_up: &[Vec2],
-) -> Option<(Vec2, Path)> {
+fn nearest_frontier(g: &PlanGrid, p: Vec2, config: &ExploreConfig, given_up: &[Vec2]) -> Planned {
     let min_cells = (config.min_frontier_m / config.plan_cell_m).ceil() as usize;
     let frontiers = clusters(g, min_cells);
     let wanted = |k: usize| {
@@ -430,7 +442,14 @@ fn nearest_frontier(
                 .all(|&q| (g.center(k) - q).norm() > config.unreachable_radius_m)
     };
     let starts = entries(g, p, config.r_min_m() + config.plan_cell_m);
-    let found = search(g, &starts, wanted, |_| 0.0)?;
-    let goal = g.center(*found.cells.last()?);
-    Some((goal, Path::through(g, p, &found.cells, None)))
+    if starts.is_empty() {
+        return Planned::Unmapped;
+    }
+    match search(g, &starts, wanted, |_| 0.0) {
+        Some(found) => {
+            let goal = g.center(found.cells[found.cells.len() - 1]);
+            Planned::To(goal, Path::through(g, p, &found.cells, None))
+        }
+        None => Planned::NoFrontier,
+    }
 }

@@ -167,6 +167,22 @@ fn a_closed_room_is_done() {
 }
 
 #[test]
+fn a_vehicle_where_the_map_is_not_drawn_yet_is_not_done() {
+    // The map holds the room with the door; the vehicle stands far off in space no keyframe
+    // has drawn (it flew on past what the last keyframe saw). That is no sign that nothing is
+    // left to explore: the explorer waits for the map instead of ending.
+    let mut e = explorer(&room_with_door(1.2), &INSIDE);
+    let unmapped = at(30.0, 30.0);
+    assert!(matches!(e.next(unmapped), ExploreStep::Waypoint(_)));
+    e.set_time(5.0);
+    assert!(matches!(e.next(unmapped), ExploreStep::Waypoint(_)));
+    // Back in the room the door is still the frontier (planned at the next replanning).
+    e.set_time(6.5);
+    assert!(matches!(e.next(at(1.5, 2.0)), ExploreStep::Waypoint(_)));
+    assert!(e.goal().unwrap().x > 4.5);
+}
+
+#[test]
 fn the_edge_of_the_planning_window_is_no_frontier() {
     // A 1 m window in a closed 5 m room: the room beyond the window is known, so nothing is
     // left to explore, and the door case still finds the door beyond the window.
