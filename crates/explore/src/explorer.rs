@@ -445,11 +445,11 @@ fn nearest_frontier(g: &PlanGrid, p: Vec2, config: &ExploreConfig, given_up: &[V
     if starts.is_empty() {
         return Planned::Unmapped;
     }
-    match search(g, &starts, wanted, |_| 0.0) {
-        Some(found) => {
-            let goal = g.center(found.cells[found.cells.len() - 1]);
-            Planned::To(goal, Path::through(g, p, &found.cells, None))
-        }
-        None => Planned::NoFrontier,
-    }
+    let Some(found) = search(g, &starts, wanted, |_| 0.0) else {
+        return Planned::NoFrontier;
+    };
+    let Some(&last) = found.cells.last() else {
+        return Planned::NoFrontier;
+    };
+    Planned::To(g.center(last), Path::through(g, p, &found.cells, None))
 }
