@@ -6,7 +6,8 @@
 # 1-5), the position error against the full-rate SLAM trajectory at the same stamps after the
 # best rigid fit (RMS and largest, m: this one sees a divergence whatever relations survive),
 # the steps between kept scans that differ from the full-rate path's (where it went wrong
-# first, and how: a heading off, or a step cut short along a corridor), and what the run reported about being lost (and the wide searches the local map contradicted).
+# first, and how: a heading off, or a step cut short along a corridor), and what the run
+# reported about being lost (and the wide searches the local map contradicted).
 #   bash scripts/slam_phases.sh            (BIN=path/to/plumbline to measure another binary)
 #   JOBS=2 runs two phases at a time.
 set -euo pipefail
