@@ -10,7 +10,7 @@ use super::autopilot::{Autopilot, AutopilotConfig};
 use super::params::ParamError;
 use crate::geom::Pose2;
 use crate::guidance::nearest_hits::NearestHits;
-use crate::matching::{LidarOdometry, OdometryConfig, OdometryStep};
+use crate::matching::{LidarOdometry, MotionLimits, OdometryConfig, OdometryStep};
 use crate::msgs::{EstimatedState, Inputs, Outputs, ScanMatchDelta, ScanMatchStatus};
 use crate::scan::level::{Leveller, ScanPlane};
 use crate::scan::sweep::SweepMotion;
@@ -23,10 +23,10 @@ pub struct Onboard<const N: usize> {
     autopilot: Autopilot,
     /// Scan points the matcher's dynamic-object test has rejected so far (seed 000 sec. 4.2).
     rejected_points: u64,
-    /// The estimated pose when the previous scan arrived: the IMU-aided motion since then is
-    /// the matcher's initial guess, better than repeating the last motion when a push or a
-    /// gust changes the velocity between revolutions.
-    pose_at_last_scan: Option<Pose2>,
+    /// The estimate when the previous scan arrived, before and after its match was fused: the
+    /// IMU-aided motion since then is the matcher's initial guess, better than repeating the
+    /// last motion when a push or a gust changes the velocity between revolutions.
+    last_scan: Option<LastScan>,
     /// The levelled copy of the scan being matched.
     leveller: Leveller<N>,
 }
@@ -37,7 +37,7 @@ impl<const N: usize> Onboard<N> {
             odometry: LidarOdometry::new(odometry),
             autopilot: Autopilot::new(autopilot),
             rejected_points: 0,
-            pose_at_last_scan: None,
+            last_scan: None,
             leveller: Leveller::default(),
         }
     }
@@ -77,15 +77,32 @@ impl<const N: usize> Onboard<N> {
             }
             None => inputs,
         };
-        self.autopilot.step(inputs, dt)
+        let out = self.autopilot.step(inputs, dt);
+        if let (Some(last), Some(_)) = (self.last_scan.as_mut(), scan) {
+            // Taken back one step along the velocity, to the time the next scan's pose is read
+            // at (the estimate before its step), so that only the fuse separates it from
+            // `before`.
+            let e = out.estimate;
+            let [vx, vy, _] = e.velocity_m_s;
+            last.after = Pose2::new(
+                e.position_m[0] - vx * dt,
+                e.position_m[1] - vy * dt,
+                e.yaw_rad,
+            );
+        }
+        out
     }
 
     /// Levels the scan, matches it and returns the estimator's view of the odometry step.
     fn match_scan(&mut self, inputs: &Inputs, scan: &Scan<N>) -> ScanMatchDelta {
         let e = self.autopilot.last_outputs().estimate;
         let pose = Pose2::new(e.position_m[0], e.position_m[1], e.yaw_rad);
-        let prior = self.pose_at_last_scan.map(|before| before.between(pose));
-        self.pose_at_last_scan = Some(pose);
+        let prior = self.last_scan.map(|last| last.prior(pose, scan.stamp_s));
+        self.last_scan = Some(LastScan {
+            before: pose,
+            after: pose,
+            stamp_s: scan.stamp_s,
+        });
         // The height estimate is of the vehicle; the lidar sits a little above it, which only
         // makes the floor test stricter.
         let plane = ScanPlane {
@@ -99,6 +116,40 @@ impl<const N: usize> Onboard<N> {
             self.rejected_points += u64::from(result.quality.rejected_dynamic);
         }
         scan_match_delta(&step, scan.stamp_s)
+    }
+}
+
+/// The estimate at the previous scan, before and after the filter fused what came with it.
+#[derive(Clone, Copy, Debug)]
+struct LastScan {
+    before: Pose2,
+    after: Pose2,
+    stamp_s: f64,
+}
+
+impl LastScan {
+    /// The matcher's guess for the scan at `stamp_s`, the estimate then being `now`: the
+    /// estimated motion since the previous scan, with the filter's correction at that scan
+    /// counted as motion only while the vehicle could have made it in the interval
+    /// ([`MotionLimits`]).
+    ///
+    /// A correction of a few centimetres is mostly the filter catching up with motion its
+    /// prediction missed, and the next revolution moves the same way. A larger one is a
+    /// position fix (the companion's map, or a match across a corridor that the covariance
+    /// carried along it), not motion: replayed as motion, the matcher looks for the wall ends
+    /// of a blank corridor that far along it, finds some, and confirms the correction with a
+    /// small covariance, so that the next one is larger (an Intel flight ran 1.3 m to 7 m off
+    /// in 2 s). Past the reach the guess is the motion since the corrected estimate.
+    fn prior(&self, now: Pose2, stamp_s: f64) -> Pose2 {
+        let correction = self.before.between(self.after);
+        let shift_m = correction.translation().norm();
+        let turn_rad = libm::fabsf(correction.theta);
+        let dt_s = (stamp_s - self.stamp_s) as f32;
+        if MotionLimits::default().allows(shift_m, turn_rad, dt_s) {
+            self.before.between(now)
+        } else {
+            self.after.between(now)
+        }
     }
 }
 
@@ -219,6 +270,32 @@ mod tests {
         let restarted = scan_match_delta(&lost, 3.0);
         assert_eq!(restarted.status, ScanMatchStatus::Failed);
         assert!(restarted.becomes_reference);
+    }
+
+    #[test]
+    fn a_correction_beyond_the_vehicles_reach_is_not_replayed_as_motion() {
+        // The previous scan came 0.25 s ago; since then the estimate moved 0.1 m along x.
+        let at = |x: f32| Pose2::new(x, 0.0, 0.0);
+        let last = |corrected_m: f32| LastScan {
+            before: at(1.0),
+            after: at(1.0 + corrected_m),
+            stamp_s: 10.0,
+        };
+        let guess = |corrected_m: f32| last(corrected_m).prior(at(1.1 + corrected_m), 10.25);
+        // A few centimetres: the filter catching up with motion its prediction missed, which
+        // the next revolution repeats.
+        assert!((guess(0.04).x - 0.14).abs() < 1e-5, "{:?}", guess(0.04));
+        // Half a metre (a map fix, a correction carried along a corridor) is not motion the
+        // vehicle made in a quarter of a second: the guess is the motion since it.
+        assert!((guess(0.5).x - 0.1).abs() < 1e-5, "{:?}", guess(0.5));
+        assert!((guess(-0.5).x - 0.1).abs() < 1e-5, "{:?}", guess(-0.5));
+        // A turn the vehicle cannot make in the interval either.
+        let turned = LastScan {
+            after: Pose2::new(1.0, 0.0, 0.8),
+            ..last(0.0)
+        };
+        let now = Pose2::new(1.1, 0.0, 0.8);
+        assert!(turned.prior(now, 10.25).theta.abs() < 1e-5);
     }
 
     #[test]
