@@ -222,6 +222,17 @@ pub struct GuardConfig {
     /// (turns up to 170° between scans) the keyframe alone found nothing 4-9 times a run and
     /// the match then went astray; with the last 20 none failed. Full rate never gets here.
     pub map_keyframes: usize,
+    /// A 180° lidar that turned most of a half turn shares a sliver of its view with the
+    /// keyframe, and poses far apart fit that sliver about equally well; the last keyframes
+    /// together have seen the rest of the place. So the search is also made against them, and
+    /// their answer replaces the keyframe's winner when it is a rival of that winner on the
+    /// keyframe (`map_rival`: another peak, fitting the keyframe at least `ratio` of the
+    /// winner's score) and the last keyframes fit it better than they fit the winner by
+    /// `map_margin` (mean likelihood). The keyframe carries no drift and the last keyframes
+    /// together do (along a corridor), so they only choose between the keyframe's own peaks,
+    /// never move a peak, and only by a margin drift does not make.
+    pub map_rival: Rival,
+    pub map_margin: f32,
 }
 
 impl Default for GuardConfig {
@@ -241,6 +252,12 @@ impl Default for GuardConfig {
             min_found_score: 0.35,
             min_gain: 1.5,
             map_keyframes: 20,
+            map_rival: Rival {
+                exclude_m: 0.5,
+                exclude_rad: 0.3,
+                ratio: 0.8,
+            },
+            map_margin: 0.25,
         }
     }
 }
