@@ -47,12 +47,16 @@ impl SearchBox {
 }
 
 /// The candidate in `search` around `guess` under which most points find a reference point
-/// within `cfg.recovery_radius_m` (the first in search order among equals).
+/// within `cfg.recovery_radius_m` (the first in search order among equals: heading, then x,
+/// then y, each from the lowest; the guess itself if no candidate scores a point).
 ///
 /// Most candidates are far off, and a candidate is dropped as soon as its remaining points
-/// cannot lift it to the count it needs: above the best so far, and at least the guess's own
-/// count (the best is never below that, so a candidate short of it can never be the answer).
-/// The answer is the one a full count of every candidate gives.
+/// cannot lift it to the count it needs: that of the best so far (one more if the best comes
+/// first in search order), and at least the guess's own count (the best is never below that,
+/// so a candidate short of it can never be the answer). The candidates are counted from the
+/// guess outwards, so that a good count, usually found near the guess, sets that bar early and
+/// the far candidates are dropped after fewer points. The answer is the one a full count of
+/// every candidate in search order gives.
 ///
 /// Out of line: inlined, its frame (a heading's sine and cosine kept across all its
 /// translations) joined the match's, the deepest of the bare build's stack.
@@ -84,22 +88,47 @@ pub fn best_pose<const N: usize>(
             guess.y + iy as f32 * search.translation_step_m,
         )
     };
+    // A candidate's place in search order.
+    let side = 2 * i64::from(nt) + 1;
+    let order = |k: i32, ix: i32, iy: i32| {
+        (i64::from(k + nh) * side + i64::from(ix + nt)) * side + i64::from(iy + nt)
+    };
+    // The guess first: its count is the floor.
     let floor = counter.hits(turn(heading(0)), place(0, 0), 0);
-    let mut best = (0usize, guess);
-    for k in -nh..=nh {
+    // (count, pose, place in search order) of the best candidate so far.
+    let mut best = (0usize, guess, i64::MAX);
+    if floor > 0 {
+        best = (
+            floor,
+            Pose2::new(place(0, 0).x, place(0, 0).y, heading(0)),
+            order(0, 0, 0),
+        );
+    }
+    for k in outwards(nh) {
         let theta = heading(k);
         let rotation = turn(theta);
-        for ix in -nt..=nt {
-            for iy in -nt..=nt {
+        for ix in outwards(nt) {
+            for iy in outwards(nt) {
+                if (k, ix, iy) == (0, 0, 0) {
+                    continue;
+                }
+                let at = order(k, ix, iy);
+                let beats = best.0 + usize::from(at > best.2);
+                let need = beats.max(floor).max(1);
                 let t = place(ix, iy);
-                let hits = counter.hits(rotation, t, (best.0 + 1).max(floor));
-                if hits > best.0 && hits >= floor {
-                    best = (hits, Pose2::new(t.x, t.y, theta));
+                let hits = counter.hits(rotation, t, need);
+                if hits >= need {
+                    best = (hits, Pose2::new(t.x, t.y, theta), at);
                 }
             }
         }
     }
     best.1
+}
+
+/// `0, -1, 1, -2, 2, ..., -n, n`: steps of a search from its centre outwards.
+fn outwards(n: i32) -> impl Iterator<Item = i32> {
+    (0..=2 * n).map(|m| if m % 2 == 0 { m / 2 } else { -(m + 1) / 2 })
 }
 
 /// Counts the points of `current` (every `stride`-th) that find a point of `reference` within

@@ -334,13 +334,7 @@ impl OccupancyGrid {
         if state != CellState::Occupied || fraction <= 0.0 {
             return state;
         }
-        let mut most = 0;
-        for dj in -1..=1 {
-            for di in -1..=1 {
-                let n = Cell::new(cell.i.saturating_add(di), cell.j.saturating_add(dj));
-                most = most.max(self.tiles.counts(n).0);
-            }
-        }
+        let most = self.tiles.most_hits_around(cell);
         if f32::from(h) < fraction * f32::from(most) {
             CellState::Unknown
         } else {

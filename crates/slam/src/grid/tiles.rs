@@ -228,7 +228,11 @@ impl Tiles {
             minor_step,
         } = line;
         let offset_step = |(di, dj): (i32, i32)| di as isize + (dj as isize) * TILE as isize;
-        let (major_off, minor_off) = (offset_step(major_step), offset_step(minor_step));
+        // A step moves the offset in the tile one way or the other, and the decision variable
+        // with it, by whether the line passed half a cell: two selects and two adds a cell.
+        let straight = (offset_step(major_step), 2 * minor);
+        let diagonal_off = offset_step(major_step) + offset_step(minor_step);
+        let slanted = (diagonal_off, 2 * minor - 2 * major);
         let diagonal = (major_step.0 + minor_step.0, major_step.1 + minor_step.1);
         let threshold = if solid_hits == 0 {
             u32::MAX
@@ -241,13 +245,16 @@ impl Tiles {
         let mut left = major;
         while left > 0 {
             let run = run_in_tile(cell, left, diagonal);
+            let first = major - left;
+            let err_before = err;
             let corner = Cell::new(cell.i & !TILE_MASK, cell.j & !TILE_MASK);
             let (tile, k) = self.tile_mut(cell);
             let mut off = k as isize;
-            let mut minor_steps = 0i64;
             let mut saturated = false;
-            for t in major - left..major - left + run {
-                let o = off as usize;
+            for t in first..first + run {
+                // The run stays inside the tile, so the mask changes no offset; it only spares
+                // the bounds check.
+                let o = off as usize & (TILE_CELLS - 1);
                 let counts = &mut tile.cells[o];
                 if u32::from(counts.hits) >= threshold {
                     solid.push((t, cell_at(corner, o)));
@@ -258,15 +265,13 @@ impl Tiles {
                     }
                     counts.misses += 1;
                 }
-                if err > 0 {
-                    off += minor_off;
-                    err -= 2 * major;
-                    minor_steps += 1;
-                }
-                off += major_off;
-                err += 2 * minor;
+                let (off_step, err_step) = if err > 0 { slanted } else { straight };
+                off += off_step;
+                err += err_step;
             }
             self.saturated |= saturated;
+            // The minor-axis steps taken in the run, from the decision variable's change.
+            let minor_steps = (err_before + run * 2 * minor - err) / (2 * major);
             let moved = |a: i32, b: i32| (i64::from(a) * run + i64::from(b) * minor_steps) as i32;
             cell = Cell::new(
                 cell.i + moved(major_step.0, minor_step.0),
@@ -315,6 +320,29 @@ impl Tiles {
             |i: i32, j: i32| usize::from(u32::from(self.counts(Cell::new(i, j)).0) >= threshold);
         let pair = |(di, dj): (i32, i32)| solid(c.i + di, c.j + dj) + solid(c.i - di, c.j - dj);
         (pair(a), pair(b))
+    }
+
+    /// The most hits any cell of the 3 x 3 block centred on `c` holds (cells beyond the
+    /// coordinate range left out). The nine lie in `c`'s own tile unless `c` is on its edge,
+    /// and are then read from it with one lookup.
+    pub fn most_hits_around(&self, c: Cell) -> u16 {
+        let inner = |v: i32| (1..TILE_MASK).contains(&(v & TILE_MASK));
+        if let (true, true, Some(tile)) = (inner(c.i), inner(c.j), self.tile_at(c)) {
+            let k = offset_in_tile(c);
+            let row = |o: usize| {
+                let r = &tile.cells[o - 1..=o + 1];
+                r[0].hits.max(r[1].hits).max(r[2].hits)
+            };
+            return row(k - TILE).max(row(k)).max(row(k + TILE));
+        }
+        let mut most = 0;
+        for dj in -1..=1 {
+            for di in -1..=1 {
+                let n = Cell::new(c.i.saturating_add(di), c.j.saturating_add(dj));
+                most = most.max(self.counts(n).0);
+            }
+        }
+        most
     }
 
     /// Allocates every tile the line from `from` to `to` passes through (the cells of
@@ -501,6 +529,29 @@ mod tests {
                     .count()
             };
             prop_assert_eq!(t.solid_beside(c, a, b, 3), (one_by_one(a), one_by_one(b)));
+        }
+    }
+
+    proptest! {
+        /// The most hits around a cell are the same whether the nine are read from the cell's
+        /// own tile or looked up one by one, at tile edges and corners too.
+        #[test]
+        fn most_hits_around_read_alike_inside_a_tile_and_across_its_edges(
+            hits in prop::collection::vec((near_edges(), near_edges(), 1u16..6), 1..60),
+            i in near_edges(),
+            j in near_edges(),
+        ) {
+            let mut t = Tiles::default();
+            t.cover(CellRect { min: Cell::new(-71, -71), max: Cell::new(71, 71) });
+            for &(i, j, n) in &hits {
+                (0..n).for_each(|_| t.add_hit(Cell::new(i, j)));
+            }
+            let one_by_one = (-1..=1)
+                .flat_map(|dj| (-1..=1).map(move |di| (di, dj)))
+                .map(|(di, dj)| t.counts(Cell::new(i + di, j + dj)).0)
+                .max()
+                .unwrap_or(0);
+            prop_assert_eq!(t.most_hits_around(Cell::new(i, j)), one_by_one);
         }
     }
 
