@@ -4,6 +4,7 @@
 //! that exploring is done, and the way home with its length.
 #![forbid(unsafe_code)]
 
+pub mod blind;
 pub mod config;
 pub mod explorer;
 pub mod frontier;
@@ -12,6 +13,7 @@ pub mod path;
 pub mod plan_grid;
 pub mod search;
 
+pub use blind::BlindBudget;
 pub use config::{ConfigError, ExploreConfig};
 pub use explorer::{DoneReason, ExploreStats, ExploreStep, Explorer};
 pub use live_map::{LiveMap, MapUpdate};

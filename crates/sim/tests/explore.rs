@@ -2,7 +2,7 @@
 //! guidance) fly a world they have never seen, scored against its truth. Runs are short; the
 //! ten-minute flights of the targets are the benchmarks' (`scripts/explore-seeds.sh`).
 
-use plumbline_sim::runner::companion::Strategy;
+use plumbline_sim::runner::companion::{ExploreEnd, Strategy};
 use plumbline_sim::runner::{Recorder, SimConfig, StateSample};
 use plumbline_sim::scenario::{self, Options, Report};
 use plumbline_sim::sensors::lidar::LidarProfile;
@@ -169,6 +169,33 @@ fn a_featureless_corridor_is_reported_degenerate_and_never_flown_to_its_end() {
     // The corridor's centre line is y = 1 m.
     let down = states.last().unwrap().position;
     assert!((down.y - 1.0).abs() < 0.25, "landed at y = {:.2} m", down.y);
+}
+
+#[test]
+fn a_featureless_corridor_ends_exploring_while_the_way_back_still_fits() {
+    // Past the start room's wall nothing along the corridor is within the XV-11's reach: the
+    // estimate's one-sigma along it grows from the moment that wall drops out of range. The
+    // companion ends exploring while flying back as far as it came still fits in the flight
+    // part's bound, instead of exploring on until the flight part lands wherever the bound
+    // runs out; the vehicle comes back toward the start room.
+    for strategy in [Strategy::Frontier, Strategy::WallFollow] {
+        let (report, states) = explore(World::parse(LONG_CORRIDOR).unwrap(), 3, 120.0, strategy);
+        let e = report.score.explore.as_ref().unwrap();
+        let log = &report.exploration.as_ref().unwrap().companion;
+        assert!(
+            matches!(log.explore_end, Some((_, ExploreEnd::BlindBudget))),
+            "{strategy:?}: {:?}",
+            log.explore_end
+        );
+        assert_eq!(e.collisions, 0, "{strategy:?}: {e:?}");
+        assert!(e.landed, "{strategy:?}: {e:?}");
+        let farthest = states.iter().map(|s| s.position.x).fold(f64::MIN, f64::max);
+        let down = states.last().unwrap().position.x;
+        assert!(
+            down < farthest - 1.0,
+            "{strategy:?}: landed at x = {down:.2} m, farthest {farthest:.2} m"
+        );
+    }
 }
 
 #[test]

@@ -23,6 +23,7 @@ fn end_name(end: ExploreEnd) -> &'static str {
         ExploreEnd::Explorer(DoneReason::NoReachableFrontier) => "no_reachable_frontier",
         ExploreEnd::Explorer(DoneReason::CoverageStalled) => "coverage_stalled",
         ExploreEnd::TimeBudget => "time_budget",
+        ExploreEnd::BlindBudget => "blind_budget",
     }
 }
 

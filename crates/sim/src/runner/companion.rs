@@ -19,6 +19,7 @@ use super::onboard_link::{
 };
 use super::progress::{ProgressWatch, Verdict};
 use super::{Pilot, SetupError};
+use plumbline_core::estimate::ekf::EkfConfig;
 use plumbline_core::flight::mission::MissionConfig;
 use plumbline_core::geom::{normalize_angle, Pose2, Vec2};
 use plumbline_core::guidance::config::GuidanceConfig;
@@ -28,7 +29,7 @@ use plumbline_core::msgs::{
     CompanionMessages, CompanionSetpoint, FlightMode, MissionCommand, PoseFix, SetpointTarget,
 };
 use plumbline_core::scan::Scan;
-use plumbline_explore::{DoneReason, ExploreStep, Explorer, Path};
+use plumbline_explore::{BlindBudget, DoneReason, ExploreStep, Explorer, Path};
 use plumbline_slam::{local_map_cells, ScanPose, Slam, SlamConfig};
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -50,6 +51,9 @@ const HOME_LOOKAHEAD_M: f32 = 1.0;
 /// Fastest turn the companion asks for, rad/s: the scan matcher on board loses a slow lidar
 /// when the heading sweeps much faster (0.5 rad/s is 3 degrees a URG-04LX revolution).
 const YAW_RATE_RAD_S: f32 = 0.5;
+/// Time to stop from cruise and head back, s: the velocity loop's lag and a deceleration
+/// from the field's 0.5 m/s, with the replan of the way home.
+const TURN_BACK_S: f32 = 2.0;
 /// Quality of a matched pose and of a predicted one (the autopilot refuses below 20).
 const QUALITY_MATCHED: u8 = 80;
 const QUALITY_PREDICTED: u8 = 10;
@@ -92,6 +96,9 @@ pub enum ExploreEnd {
     Explorer(DoneReason),
     /// The time left covered only the way home.
     TimeBudget,
+    /// Down a blank stretch, the way back to where the position was last seen only just
+    /// fitted in the flight part's degraded bound ([`BlindBudget`]).
+    BlindBudget,
 }
 
 /// What the companion did, kept for the score and the plots.
@@ -140,6 +147,8 @@ pub struct ExploreCompanion<'m, const N: usize> {
     /// Time of the previous revolution, s.
     last_t_s: Option<f64>,
     reset_counter: u8,
+    /// Whether the way back from a blank stretch still fits in the flight part's bound.
+    blind: BlindBudget,
     log: Rc<RefCell<CompanionLog>>,
 }
 
@@ -169,6 +178,10 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
             last: None,
             last_t_s: None,
             reset_counter: 0,
+            blind: BlindBudget::new(
+                EkfConfig::default().degraded_max_position_std_m,
+                TURN_BACK_S,
+            ),
             log,
         })
     }
@@ -239,7 +252,16 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
     }
 
     /// Exploring: the next setpoint, or the decision to go home.
-    fn explore(&mut self, t_s: f64, scan: &Scan<N>, pose: Pose2, msgs: &mut CompanionMessages) {
+    /// Exploring also ends while the way back from a blank stretch still fits in the flight
+    /// part's degraded bound (`way_back_fits`, [`BlindBudget`]).
+    fn explore(
+        &mut self,
+        t_s: f64,
+        scan: &Scan<N>,
+        pose: Pose2,
+        way_back_fits: bool,
+        msgs: &mut CompanionMessages,
+    ) {
         let home_m = self.path_home(t_s, pose).map(|p| p.length_m);
         msgs.path_home_m = home_m;
         // Without a way home on the map (yet) the straight line is the best guess.
@@ -253,6 +275,7 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
         let end = match step {
             ExploreStep::Done(reason) => Some(ExploreEnd::Explorer(reason)),
             _ if out_of_time => Some(ExploreEnd::TimeBudget),
+            _ if !way_back_fits => Some(ExploreEnd::BlindBudget),
             ExploreStep::Waypoint(_) => None,
         };
         if let Some(end) = end {
@@ -363,6 +386,8 @@ impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
             ..CompanionMessages::default()
         };
         let mode = flight.final_mode();
+        let [sx, sy, _] = flight.last_estimate.position_std_m;
+        let way_back_fits = self.blind.update(t_s, [sx, sy]);
         {
             let mut log = self.log.borrow_mut();
             log.poses.push((t_s, at.pose));
@@ -386,13 +411,13 @@ impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
             Phase::Waiting if mode == FlightMode::Hold => {
                 self.phase = Phase::Exploring;
                 msgs.command = Some(MissionCommand::StartExplore);
-                self.explore(t_s, scan, at.pose, &mut msgs);
+                self.explore(t_s, scan, at.pose, way_back_fits, &mut msgs);
             }
             Phase::Exploring => {
                 if mode == FlightMode::Hold {
                     msgs.command = Some(MissionCommand::StartExplore);
                 }
-                self.explore(t_s, scan, at.pose, &mut msgs);
+                self.explore(t_s, scan, at.pose, way_back_fits, &mut msgs);
             }
             Phase::Returning => self.go_home(t_s, scan, at.pose, &mut msgs),
             // No setpoint: the autopilot holds where it is until it takes up the landing.
