@@ -16,6 +16,7 @@ mod landing_spot;
 pub mod ground;
 mod lockstep;
 pub mod companion;
+pub mod crew;
 pub mod mission;
 pub mod onboard_link;
 pub mod pilot;

@@ -10,7 +10,8 @@
 
 use super::flight::{Entry, Flight, Options, ScenarioError};
 use super::onboard::{self, ARM_AT_S};
-use crate::runner::companion::{AnyExploreCrew, CompanionLog, CompanionParts, ExploreCrew};
+use crate::runner::companion::CompanionLog;
+use crate::runner::crew::{AnyExploreCrew, CompanionParts, ExploreCrew};
 use crate::runner::onboard_link::{FlightLog, OnboardLink, Script, LARGE_SCAN_BEAMS, XV11_BEAMS};
 use crate::runner::{SetupError, SimConfig};
 use plumbline_core::guidance::config::GuidanceConfig;
