@@ -10,6 +10,12 @@
 //! A rebuild costs the whole map, tens of milliseconds in a building, so it is spread over
 //! the scans that follow: a second grid is filled a bounded number of keyframes per update
 //! while the first keeps serving, and takes its place once it has caught up.
+//!
+//! An optimisation that moved no keyframe far enough to shift any of its beams' ends by half a
+//! cell from where the grid drew them starts no rebuild: the grid already holds what a rebuild
+//! would draw, to within the half cell its own quantisation rounds every end by. Without this,
+//! a flight that closes a loop every few keyframes redraws the whole map without pause and,
+//! its rebuilds restarted before they finish, serves a map that never catches up.
 
 use plumbline_core::geom::Pose2;
 use plumbline_core::scan::Scan;
@@ -32,6 +38,8 @@ struct Rebuild {
     grid: OccupancyGrid,
     /// Keyframes before this one are in it.
     next: usize,
+    /// The pose each keyframe was drawn at in it.
+    drawn: Vec<Option<Pose2>>,
 }
 
 pub struct LiveMap {
@@ -39,6 +47,11 @@ pub struct LiveMap {
     map_range_m: f32,
     /// Keyframe `k`'s scan (`None` once the backend dropped it, or before it was seen).
     scans: Vec<Option<PreparedScan>>,
+    /// The farthest beam end of keyframe `k`'s scan from its sensor, m: how far a turn of the
+    /// keyframe moves its beams' ends per radian.
+    reach_m: Vec<f32>,
+    /// The pose keyframe `k` was drawn at in the serving grid (`None` while it is not in it).
+    drawn: Vec<Option<Pose2>>,
     /// Keyframes before this one are settled: inserted or dropped.
     settled: usize,
     /// The backend's optimisation count the grid's poses are from.
@@ -68,6 +81,8 @@ impl LiveMap {
             grid: OccupancyGrid::new(grid)?,
             map_range_m,
             scans: Vec::new(),
+            reach_m: Vec::new(),
+            drawn: Vec::new(),
             settled: 0,
             optimisations: 0,
             version: 0,
@@ -104,12 +119,20 @@ impl LiveMap {
         if let (true, Some(k)) = (at.new_keyframe, at.keyframe) {
             if self.scans.len() <= k {
                 self.scans.resize(k + 1, None);
+                self.reach_m.resize(k + 1, 0.0);
+                self.drawn.resize(k + 1, None);
             }
             let prepared = PreparedScan::from_beams(
                 scan.beams(),
                 self.map_range_m,
                 self.grid.config().no_return_clear_m,
             )?;
+            self.reach_m[k] = prepared
+                .hits()
+                .iter()
+                .chain(prepared.clears())
+                .map(|p| p.norm())
+                .fold(0.0, f32::max);
             self.scans[k] = Some(prepared);
         }
         let mut update = MapUpdate::default();
@@ -117,10 +140,13 @@ impl LiveMap {
         let mut first_error = None;
         if optimisations != self.optimisations {
             self.optimisations = optimisations;
-            self.rebuilding = Some(Rebuild {
-                grid: OccupancyGrid::new(*self.grid.config())?,
-                next: 0,
-            });
+            if self.rebuilding.is_some() || self.moved_since_drawn(slam) {
+                self.rebuilding = Some(Rebuild {
+                    grid: OccupancyGrid::new(*self.grid.config())?,
+                    next: 0,
+                    drawn: vec![None; self.scans.len()],
+                });
+            }
         }
         while self.settled < self.scans.len() {
             let k = self.settled;
@@ -170,6 +196,8 @@ impl LiveMap {
             if next >= self.settled {
                 if let Some(done) = self.rebuilding.take() {
                     self.grid = done.grid;
+                    self.drawn = done.drawn;
+                    self.drawn.resize(self.scans.len(), None);
                     self.rebuilds += 1;
                     update.rebuilt = true;
                 }
@@ -192,6 +220,20 @@ impl LiveMap {
         first_error.map_or(Ok(()), Err)
     }
 
+    /// Whether the graph has moved a keyframe in the serving grid so far from where it was
+    /// drawn that one of its beams' ends is half a cell or more away (a shift plus a turn
+    /// times the farthest end bounds how far any end moved).
+    fn moved_since_drawn<const N: usize>(&self, slam: &Slam<'_, N>) -> bool {
+        let tolerance_m = 0.5 * self.grid.config().resolution_m;
+        (0..self.settled).any(|k| {
+            let (Some(drawn), Some(now)) = (self.drawn[k], slam.keyframe_pose(k)) else {
+                return false;
+            };
+            let (shift_m, turn_rad) = drawn.distance_to(now);
+            shift_m + turn_rad * self.reach_m[k] >= tolerance_m
+        })
+    }
+
     /// Inserts keyframe `k` at its current pose into the serving grid, or into the grid being
     /// rebuilt.
     fn insert<const N: usize>(
@@ -203,14 +245,19 @@ impl LiveMap {
         let (Some(scan), Some(pose)) = (&self.scans[k], slam.keyframe_pose(k)) else {
             return Ok(());
         };
-        let grid = match (&mut self.rebuilding, into_rebuild) {
-            (Some(r), true) => &mut r.grid,
-            _ => &mut self.grid,
+        let (grid, drawn) = match (&mut self.rebuilding, into_rebuild) {
+            (Some(r), true) => (&mut r.grid, &mut r.drawn),
+            _ => (&mut self.grid, &mut self.drawn),
         };
         grid.insert(pose, scan).map_err(|e| GridError::InKeyframe {
             index: k,
             error: Box::new(e),
-        })
+        })?;
+        if drawn.len() <= k {
+            drawn.resize(k + 1, None);
+        }
+        drawn[k] = Some(pose);
+        Ok(())
     }
 
     /// Inserts a scan at a known pose without SLAM (synthetic maps, replays of a finished run).
