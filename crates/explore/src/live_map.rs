@@ -140,12 +140,9 @@ impl LiveMap {
         let mut first_error = None;
         if optimisations != self.optimisations {
             self.optimisations = optimisations;
-            if self.rebuilding.is_some() || self.moved_since_drawn(slam) {
-                self.rebuilding = Some(Rebuild {
-                    grid: OccupancyGrid::new(*self.grid.config())?,
-                    next: 0,
-                    drawn: vec![None; self.scans.len()],
-                });
+            let half_cell_m = 0.5 * self.grid.config().resolution_m;
+            if self.rebuilding.is_some() || self.moved_since_drawn(slam, half_cell_m) {
+                self.start_rebuild()?;
             }
         }
         while self.settled < self.scans.len() {
@@ -171,9 +168,13 @@ impl LiveMap {
         first_error.map_or(Ok(update), Err)
     }
 
-    /// Finishes a rebuild in progress at once (the end of a flight, or a test that compares
-    /// the map with the slam's).
+    /// Finishes a rebuild in progress at once, or rebuilds now if a keyframe was drawn
+    /// anywhere but at its current pose (the end of a flight, or a test that compares the map
+    /// with the slam's): the grid is then exactly the one drawn at the final poses.
     pub fn finish_rebuild<const N: usize>(&mut self, slam: &Slam<'_, N>) -> Result<(), GridError> {
+        if self.rebuilding.is_none() && self.moved_since_drawn(slam, 0.0) {
+            self.start_rebuild()?;
+        }
         let mut update = MapUpdate::default();
         self.rebuild(slam, usize::MAX, &mut update)?;
         if update.rebuilt {
@@ -220,17 +221,29 @@ impl LiveMap {
         first_error.map_or(Ok(()), Err)
     }
 
+    /// Starts filling a new grid from the first keyframe, in place of any rebuild under way.
+    fn start_rebuild(&mut self) -> Result<(), GridError> {
+        self.rebuilding = Some(Rebuild {
+            grid: OccupancyGrid::new(*self.grid.config())?,
+            next: 0,
+            drawn: vec![None; self.scans.len()],
+        });
+        Ok(())
+    }
+
     /// Whether the graph has moved a keyframe in the serving grid so far from where it was
-    /// drawn that one of its beams' ends is half a cell or more away (a shift plus a turn
-    /// times the farthest end bounds how far any end moved).
-    fn moved_since_drawn<const N: usize>(&self, slam: &Slam<'_, N>) -> bool {
-        let tolerance_m = 0.5 * self.grid.config().resolution_m;
+    /// drawn that one of its beams' ends may lie more than `tolerance_m` away (a shift plus a
+    /// turn times the farthest end bounds how far any end moved).
+    fn moved_since_drawn<const N: usize>(&self, slam: &Slam<'_, N>, tolerance_m: f32) -> bool {
         (0..self.settled).any(|k| {
             let (Some(drawn), Some(now)) = (self.drawn[k], slam.keyframe_pose(k)) else {
                 return false;
             };
+            if drawn == now {
+                return false;
+            }
             let (shift_m, turn_rad) = drawn.distance_to(now);
-            shift_m + turn_rad * self.reach_m[k] >= tolerance_m
+            shift_m + turn_rad * self.reach_m[k] > tolerance_m
         })
     }
 
