@@ -16,6 +16,11 @@
 //! would draw, to within the half cell its own quantisation rounds every end by. Without this,
 //! a flight that closes a loop every few keyframes redraws the whole map without pause and,
 //! its rebuilds restarted before they finish, serves a map that never catches up.
+//!
+//! A loop closure mostly bends the loop it closed: the keyframes drawn before the first one it
+//! moved stay where they were. A rebuild therefore keeps a copy of its grid as it reaches that
+//! keyframe, and the next rebuild starts from the copy when none of the keyframes in it has
+//! moved by half a cell since, drawing only the keyframes after it.
 
 use plumbline_core::geom::Pose2;
 use plumbline_core::scan::Scan;
@@ -33,7 +38,8 @@ pub struct MapUpdate {
     pub rebuilt: bool,
 }
 
-/// A grid being filled at the poses of the latest optimisation.
+/// A grid being filled at the poses of the latest optimisation (or a copy of one part way).
+#[derive(Clone)]
 struct Rebuild {
     grid: OccupancyGrid,
     /// Keyframes before this one are in it.
@@ -60,6 +66,10 @@ pub struct LiveMap {
     version: u64,
     rebuilds: usize,
     rebuilding: Option<Rebuild>,
+    /// A copy of a rebuild holding the keyframes before the first one its optimisation moved.
+    snapshot: Option<Rebuild>,
+    /// The keyframe before which the rebuild under way copies itself into `snapshot`.
+    snapshot_at: usize,
     /// Most keyframes a rebuild inserts per update.
     rebuild_per_update: usize,
 }
@@ -88,6 +98,8 @@ impl LiveMap {
             version: 0,
             rebuilds: 0,
             rebuilding: None,
+            snapshot: None,
+            snapshot_at: 0,
             rebuild_per_update: rebuild_per_update.max(1),
         })
     }
@@ -141,8 +153,10 @@ impl LiveMap {
         if optimisations != self.optimisations {
             self.optimisations = optimisations;
             let half_cell_m = 0.5 * self.grid.config().resolution_m;
-            if self.rebuilding.is_some() || self.moved_since_drawn(slam, half_cell_m) {
-                self.start_rebuild()?;
+            if let Some(first) = self.first_moved(&self.drawn, slam, half_cell_m) {
+                self.start_rebuild(slam, first, half_cell_m)?;
+            } else if self.rebuilding.is_some() {
+                self.start_rebuild(slam, self.settled, half_cell_m)?;
             }
         }
         while self.settled < self.scans.len() {
@@ -172,8 +186,8 @@ impl LiveMap {
     /// anywhere but at its current pose (the end of a flight, or a test that compares the map
     /// with the slam's): the grid is then exactly the one drawn at the final poses.
     pub fn finish_rebuild<const N: usize>(&mut self, slam: &Slam<'_, N>) -> Result<(), GridError> {
-        if self.rebuilding.is_none() && self.moved_since_drawn(slam, 0.0) {
-            self.start_rebuild()?;
+        if let (None, Some(first)) = (&self.rebuilding, self.first_moved(&self.drawn, slam, 0.0)) {
+            self.start_rebuild(slam, first, 0.0)?;
         }
         let mut update = MapUpdate::default();
         self.rebuild(slam, usize::MAX, &mut update)?;
@@ -207,6 +221,9 @@ impl LiveMap {
             if spent >= budget {
                 break;
             }
+            if next == self.snapshot_at && self.snapshot.as_ref().is_none_or(|s| s.next != next) {
+                self.snapshot = self.rebuilding.clone();
+            }
             if self.scans[next].is_some() {
                 spent += 1;
                 update.rebuilt_keyframes += 1;
@@ -221,22 +238,46 @@ impl LiveMap {
         first_error.map_or(Ok(()), Err)
     }
 
-    /// Starts filling a new grid from the first keyframe, in place of any rebuild under way.
-    fn start_rebuild(&mut self) -> Result<(), GridError> {
-        self.rebuilding = Some(Rebuild {
-            grid: OccupancyGrid::new(*self.grid.config())?,
-            next: 0,
-            drawn: vec![None; self.scans.len()],
+    /// Starts a new rebuild in place of any under way: from the snapshot if none of its
+    /// keyframes has moved by `tolerance_m`, else from an empty grid. It copies itself into the
+    /// snapshot before keyframe `first_moved` (the first the optimisation moved).
+    fn start_rebuild<const N: usize>(
+        &mut self,
+        slam: &Slam<'_, N>,
+        first_moved: usize,
+        tolerance_m: f32,
+    ) -> Result<(), GridError> {
+        let from_snapshot = self
+            .snapshot
+            .as_ref()
+            .filter(|s| {
+                let drawn = &s.drawn[..s.next.min(s.drawn.len())];
+                self.first_moved(drawn, slam, tolerance_m).is_none()
+            })
+            .cloned();
+        self.rebuilding = Some(match from_snapshot {
+            Some(snapshot) => snapshot,
+            None => Rebuild {
+                grid: OccupancyGrid::new(*self.grid.config())?,
+                next: 0,
+                drawn: vec![None; self.scans.len()],
+            },
         });
+        self.snapshot_at = first_moved;
         Ok(())
     }
 
-    /// Whether the graph has moved a keyframe in the serving grid so far from where it was
-    /// drawn that one of its beams' ends may lie more than `tolerance_m` away (a shift plus a
-    /// turn times the farthest end bounds how far any end moved).
-    fn moved_since_drawn<const N: usize>(&self, slam: &Slam<'_, N>, tolerance_m: f32) -> bool {
-        (0..self.settled).any(|k| {
-            let (Some(drawn), Some(now)) = (self.drawn[k], slam.keyframe_pose(k)) else {
+    /// The first keyframe the graph has moved so far from the pose in `drawn` that one of its
+    /// beams' ends may lie more than `tolerance_m` away (a shift plus a turn times the farthest
+    /// end bounds how far any end moved).
+    fn first_moved<const N: usize>(
+        &self,
+        drawn: &[Option<Pose2>],
+        slam: &Slam<'_, N>,
+        tolerance_m: f32,
+    ) -> Option<usize> {
+        (0..self.settled.min(drawn.len())).find(|&k| {
+            let (Some(drawn), Some(now)) = (drawn[k], slam.keyframe_pose(k)) else {
                 return false;
             };
             if drawn == now {
