@@ -21,6 +21,12 @@
 //! moved stay where they were. A rebuild therefore keeps a copy of its grid as it reaches that
 //! keyframe, and the next rebuild starts from the copy when none of the keyframes in it has
 //! moved by half a cell since, drawing only the keyframes after it.
+//!
+//! A rebuild's grid is only read when it is copied or takes the serving grid's place, and a
+//! new optimisation throws away the rebuild under way, so the keyframes it takes in are queued
+//! with their poses and drawn only when the grid is next read: the same keyframes at the same
+//! poses in the same order, with no work spent on a rebuild that never finishes (a keyframe
+//! the grid refuses is then reported by the update that draws it).
 
 use plumbline_core::geom::Pose2;
 use plumbline_core::scan::Scan;
@@ -42,10 +48,28 @@ pub struct MapUpdate {
 #[derive(Clone)]
 struct Rebuild {
     grid: OccupancyGrid,
-    /// Keyframes before this one are in it.
+    /// Keyframes before this one are in it, or queued for it.
     next: usize,
     /// The pose each keyframe was drawn at in it.
     drawn: Vec<Option<Pose2>>,
+    /// Keyframes taken in but not drawn yet, with the poses to draw them at, in order.
+    queued: Vec<(usize, Pose2)>,
+}
+
+impl Rebuild {
+    /// Draws the queued keyframes, so that the grid holds every keyframe taken in; a keyframe
+    /// the grid refuses is left out and the first such refusal returned.
+    fn draw_queued(&mut self, scans: &[Option<PreparedScan>]) -> Result<(), GridError> {
+        let mut first_error = None;
+        for (k, pose) in self.queued.drain(..) {
+            if let Some(scan) = &scans[k] {
+                if let Err(e) = draw(&mut self.grid, &mut self.drawn, k, pose, scan) {
+                    first_error.get_or_insert(e);
+                }
+            }
+        }
+        first_error.map_or(Ok(()), Err)
+    }
 }
 
 pub struct LiveMap {
@@ -166,7 +190,7 @@ impl LiveMap {
                 Some(false) => self.scans[k] = None,
                 Some(true) => {
                     update.inserted += 1;
-                    if let Err(e) = self.insert(slam, k, false) {
+                    if let Err(e) = self.insert(slam, k) {
                         first_error.get_or_insert(e);
                     }
                 }
@@ -209,7 +233,10 @@ impl LiveMap {
         let mut spent = 0;
         while let Some(next) = self.rebuilding.as_ref().map(|r| r.next) {
             if next >= self.settled {
-                if let Some(done) = self.rebuilding.take() {
+                if let Some(mut done) = self.rebuilding.take() {
+                    if let Err(e) = done.draw_queued(&self.scans) {
+                        first_error.get_or_insert(e);
+                    }
                     self.grid = done.grid;
                     self.drawn = done.drawn;
                     self.drawn.resize(self.scans.len(), None);
@@ -221,19 +248,23 @@ impl LiveMap {
             if spent >= budget {
                 break;
             }
+            let Some(r) = self.rebuilding.as_mut() else {
+                break;
+            };
             if next == self.snapshot_at && self.snapshot.as_ref().is_none_or(|s| s.next != next) {
-                self.snapshot = self.rebuilding.clone();
+                if let Err(e) = r.draw_queued(&self.scans) {
+                    first_error.get_or_insert(e);
+                }
+                self.snapshot = Some(r.clone());
             }
             if self.scans[next].is_some() {
                 spent += 1;
                 update.rebuilt_keyframes += 1;
-                if let Err(e) = self.insert(slam, next, true) {
-                    first_error.get_or_insert(e);
+                if let Some(pose) = slam.keyframe_pose(next) {
+                    r.queued.push((next, pose));
                 }
             }
-            if let Some(r) = self.rebuilding.as_mut() {
-                r.next += 1;
-            }
+            r.next += 1;
         }
         first_error.map_or(Ok(()), Err)
     }
@@ -261,6 +292,7 @@ impl LiveMap {
                 grid: OccupancyGrid::new(*self.grid.config())?,
                 next: 0,
                 drawn: vec![None; self.scans.len()],
+                queued: Vec::new(),
             },
         });
         self.snapshot_at = first_moved;
@@ -288,30 +320,12 @@ impl LiveMap {
         })
     }
 
-    /// Inserts keyframe `k` at its current pose into the serving grid, or into the grid being
-    /// rebuilt.
-    fn insert<const N: usize>(
-        &mut self,
-        slam: &Slam<'_, N>,
-        k: usize,
-        into_rebuild: bool,
-    ) -> Result<(), GridError> {
+    /// Inserts keyframe `k` at its current pose into the serving grid.
+    fn insert<const N: usize>(&mut self, slam: &Slam<'_, N>, k: usize) -> Result<(), GridError> {
         let (Some(scan), Some(pose)) = (&self.scans[k], slam.keyframe_pose(k)) else {
             return Ok(());
         };
-        let (grid, drawn) = match (&mut self.rebuilding, into_rebuild) {
-            (Some(r), true) => (&mut r.grid, &mut r.drawn),
-            _ => (&mut self.grid, &mut self.drawn),
-        };
-        grid.insert(pose, scan).map_err(|e| GridError::InKeyframe {
-            index: k,
-            error: Box::new(e),
-        })?;
-        if drawn.len() <= k {
-            drawn.resize(k + 1, None);
-        }
-        drawn[k] = Some(pose);
-        Ok(())
+        draw(&mut self.grid, &mut self.drawn, k, pose, scan)
     }
 
     /// Inserts a scan at a known pose without SLAM (synthetic maps, replays of a finished run).
@@ -320,4 +334,23 @@ impl LiveMap {
         self.version += 1;
         Ok(())
     }
+}
+
+/// Draws keyframe `k`'s scan into `grid` at `pose`, and notes the pose in `drawn`.
+fn draw(
+    grid: &mut OccupancyGrid,
+    drawn: &mut Vec<Option<Pose2>>,
+    k: usize,
+    pose: Pose2,
+    scan: &PreparedScan,
+) -> Result<(), GridError> {
+    grid.insert(pose, scan).map_err(|e| GridError::InKeyframe {
+        index: k,
+        error: Box::new(e),
+    })?;
+    if drawn.len() <= k {
+        drawn.resize(k + 1, None);
+    }
+    drawn[k] = Some(pose);
+    Ok(())
 }
