@@ -78,16 +78,18 @@ impl PlanGrid {
             ((origin.j + height as i32) * factor - 1).min(bounds.max.j),
         );
         // The planning column is carried along the row rather than divided out of each map
-        // cell's column, and an occupied planning cell asks no more of its map cells.
+        // cell's column, and the map's states are read a row at a time (a tile looked up once
+        // per run of cells in it rather than once a cell).
         let first_column = (fine_lo.i.div_euclid(factor) - origin.i) as usize;
         let first_sub = fine_lo.i.rem_euclid(factor);
+        let mut fine_row = Vec::with_capacity((fine_hi.i - fine_lo.i + 1).max(0) as usize);
         for j in fine_lo.j..=fine_hi.j {
             let row = (j.div_euclid(factor) - origin.j) as usize * width;
             let (mut k, mut sub) = (row + first_column, first_sub);
-            for i in fine_lo.i..=fine_hi.i {
-                if states[k] != CellState::Occupied {
-                    states[k] = merge(states[k], grid.state(Cell::new(i, j)));
-                }
+            fine_row.clear();
+            grid.row_states(j, fine_lo.i, fine_hi.i, &mut fine_row);
+            for &state in &fine_row {
+                states[k] = merge(states[k], state);
                 sub += 1;
                 if sub == factor {
                     (k, sub) = (k + 1, 0);
