@@ -8,9 +8,11 @@
 //! it to explore, explore until the explorer is done or the time left only covers the way home,
 //! then say so and fly the planned path home; the autopilot lands when it is there. A way home
 //! that makes no progress is planned again round the place it stalled at, and if it still makes
-//! none the companion asks to land in place ([`super::progress`] has the bounds). Everything
-//! runs inline (the SLAM backend too), so a run is a function of its seed.
+//! none the companion asks to land in place ([`super::progress`] has the bounds). The SLAM
+//! guesses each revolution's motion from the flight part's estimate ([`EstimatedMotion`]).
+//! Everything runs inline (the SLAM backend too), so a run is a function of its seed.
 
+use super::estimated_motion::EstimatedMotion;
 use super::fix_covariance::fix_covariance;
 use super::landing_spot::landing_spot;
 use super::onboard_link::{CompanionComputer, FlightLog};
@@ -139,6 +141,8 @@ pub struct ExploreCompanion<'m, const N: usize> {
     /// The progress of the way home, from the start of the return.
     home_progress: Option<ProgressWatch>,
     last: Option<ScanPose>,
+    /// The flight part's motion since the previous revolution: the SLAM's motion guess.
+    motion: EstimatedMotion,
     /// Time of the previous revolution, s.
     last_t_s: Option<f64>,
     reset_counter: u8,
@@ -171,6 +175,7 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
             home_path: None,
             home_progress: None,
             last: None,
+            motion: EstimatedMotion::default(),
             last_t_s: None,
             reset_counter: 0,
             blind: BlindBudget::new(
@@ -367,7 +372,9 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
 impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
     fn revolution(&mut self, scan: &Scan<N>, flight: &FlightLog) -> CompanionMessages {
         let t_s = scan.stamp_s;
-        let at = self.slam.add_scan(scan, None);
+        let at = self
+            .slam
+            .add_scan(scan, self.motion.since_last(&flight.last_estimate));
         if self
             .explorer
             .borrow_mut()

@@ -12,6 +12,7 @@
 
 mod config;
 mod fix_covariance;
+mod estimated_motion;
 mod landing_spot;
 pub mod ground;
 mod lockstep;
