@@ -107,6 +107,37 @@ fn fly(walls: &[Seg], goal: Vec2, walking: bool, cfg: GuidanceConfig) -> Flight 
     out
 }
 
+/// The vehicle hovers at the origin with its goal behind a person walking straight at it from
+/// (3.5, 0) at the person's speed, swaying `sway_m` to either side of its line once a second
+/// (a gait seen through the tracker's noise, which tips the scores of the two sides to pass it
+/// on one way and the other from one revolution to the next). Returns the least clearance
+/// between the vehicle's centre and the person's body, m, and how often the commanded velocity
+/// across the person's line changed sign while a mover was reported.
+fn swaying_walker(sway_m: f32) -> (f32, usize) {
+    let mut g = Guidance::<64>::new(GuidanceConfig::default()).unwrap();
+    let walker_at = |t: f32| Vec2::new(3.5 - PERSON_SPEED_M_S * t, sway_m * (TAU * t + 0.5).sin());
+    let (mut at, mut clearance, mut switches, mut last) = (Vec2::ZERO, f32::INFINITY, 0, 0.0f32);
+    for k in 0..40 {
+        let t = k as f32 * REVOLUTION_S;
+        let mut world = hall();
+        world.extend(person(walker_at(t)));
+        let (v, mover) = command(&mut g, &world, at, k, Vec2::new(6.0, 0.0));
+        if mover && v.y.abs() > 0.1 {
+            if last * v.y < 0.0 {
+                switches += 1;
+            }
+            last = v.y;
+        }
+        for sub in 1..=10 {
+            let p = at + v * (REVOLUTION_S * sub as f32 / 10.0);
+            let c = (p - walker_at(t + REVOLUTION_S * sub as f32 / 10.0)).norm() - PERSON_RADIUS_M;
+            clearance = clearance.min(c);
+        }
+        at = at + v * REVOLUTION_S;
+    }
+    (clearance, switches)
+}
+
 /// A hall large enough that its walls never bind.
 fn hall() -> Vec<Seg> {
     vec![
@@ -237,6 +268,20 @@ fn a_walker_turning_at_a_hovering_vehicle_is_evaded_with_r_min_to_spare() {
         assert!(
             c >= ISSUE_R_MIN_M,
             "turned {turn_clearance_m} m away, came within {c} m"
+        );
+    }
+}
+
+#[test]
+fn a_swaying_walker_is_passed_on_one_side() {
+    // Its sway tips the two sides' scores one way and the other from revolution to revolution;
+    // the vehicle keeps to the side it took and leaves the walker's line.
+    for sway_m in [0.0, 0.08, 0.15] {
+        let (clearance, switches) = swaying_walker(sway_m);
+        assert!(switches <= 1, "sway {sway_m} m: {switches} switches");
+        assert!(
+            clearance >= ISSUE_R_MIN_M,
+            "sway {sway_m} m: came within {clearance} m"
         );
     }
 }

@@ -28,9 +28,13 @@ const HEADINGS: usize = 24;
 /// units of the squared speed limit): a centimetre of contact outweighs
 /// any detour.
 const CONTACT_WEIGHT: f32 = 100.0;
-/// Cost of passing a mover on the other side than before: a quarter of the disc's radius of
-/// contact risk, so a wall closing the chosen side still turns the vehicle round.
-const SIDE_SWITCH_COST: f32 = 25.0;
+/// Cost of passing a mover on the other side than before: half the disc's radius of contact
+/// risk. Each side's risk is judged from a velocity tracked over a few revolutions, and with a
+/// quarter of the radius that velocity's swings alone turned the vehicle from side to side
+/// along a walker's line, slower than the walker, instead of leaving it; a wall
+/// closing the chosen side (the guard stopping the vehicle in the walker's way) costs more and
+/// still turns it round.
+const SIDE_SWITCH_COST: f32 = 50.0;
 /// How far off a walker's estimated velocity may be, m/s: its centre is tracked over a few
 /// revolutions from the hits of one side only.
 const SPEED_UNCERTAINTY_M_S: f32 = 0.15;
