@@ -83,7 +83,7 @@ enum Phase {
     Returning,
     /// The way home made no progress even after replanning: asking to land in place.
     LandingHere,
-    /// The autopilot is landing (or down): only poses are sent.
+    /// The autopilot is landing: only poses are sent; once it is down, nothing.
     Finished,
 }
 
@@ -372,6 +372,14 @@ impl<'m, const N: usize> ExploreCompanion<'m, N> {
 impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
     fn revolution(&mut self, scan: &Scan<N>, flight: &FlightLog) -> CompanionMessages {
         let t_s = scan.stamp_s;
+        let mode = flight.final_mode();
+        if self.phase == Phase::Finished
+            && matches!(mode, FlightMode::Disarmed | FlightMode::Killed)
+        {
+            // Down for good: the mission's map is complete, and a companion that went on
+            // mapping from the floor would spend its time re-optimising around whatever walks by.
+            return CompanionMessages::default();
+        }
         let at = self
             .slam
             .add_scan(scan, self.motion.since_last(&flight.last_estimate));
@@ -387,7 +395,6 @@ impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
             pose: Some(self.fix(t_s, &at)),
             ..CompanionMessages::default()
         };
-        let mode = flight.final_mode();
         let [sx, sy, _] = flight.last_estimate.position_std_m;
         let way_back_fits = self.blind.update(t_s, [sx, sy]);
         {
