@@ -103,8 +103,6 @@ pub enum ExploreEnd {
 pub struct CompanionLog {
     /// Time exploring ended and why.
     pub explore_end: Option<(f64, ExploreEnd)>,
-    /// The SLAM pose of every revolution (map frame, which is the pose of the first scan).
-    pub poses: Vec<(f64, Pose2)>,
     /// Revolutions whose scan match failed (the pose was predicted).
     pub predicted: usize,
     /// Time flown between revolutions whose scan match saw a degenerate direction (the pose fix
@@ -399,7 +397,6 @@ impl<const N: usize> CompanionComputer<N> for ExploreCompanion<'_, N> {
         let way_back_fits = self.blind.update(t_s, [sx, sy]);
         {
             let mut log = self.log.borrow_mut();
-            log.poses.push((t_s, at.pose));
             log.predicted += usize::from(at.predicted);
             let airborne = !matches!(mode, FlightMode::Disarmed | FlightMode::Killed);
             if airborne
