@@ -54,6 +54,7 @@ fn a_pymavlink_session_gives_the_commands_it_sent() {
                     }
                 }
             }
+            InboundEvent::Estimate(s) => format!("estimate {s:?}"),
         })
         .collect();
     let sticks = match events[4] {
