@@ -190,6 +190,7 @@ impl EstimateWatch {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     const TIMEOUT_S: f64 = 0.5;
 
@@ -334,5 +335,53 @@ mod tests {
         assert_eq!(w.reading(102.03), Err(Withheld::Discontinuity));
         both(&mut w, 2.1, 9.6);
         assert_eq!(w.reading(102.13).unwrap().position_m[0], 9.6);
+    }
+
+    fn any_f32() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            -1e4f32..1e4,
+            Just(f32::NAN),
+            Just(f32::INFINITY),
+            Just(f32::NEG_INFINITY),
+            Just(f32::MAX),
+        ]
+    }
+
+    fn any_sample() -> impl Strategy<Value = EstimateSample> {
+        let part = prop_oneof![
+            (any_f32(), any_f32(), any::<bool>(), any::<u8>()).prop_map(|(x, yaw, valid, r)| {
+                EstimatePart::Pose {
+                    position_m: [x, -x, 1.0],
+                    yaw_rad: yaw,
+                    valid,
+                    reset_counter: r,
+                }
+            }),
+            any_f32().prop_map(|x| EstimatePart::Position {
+                position_m: [x, 1.0, 1.0]
+            }),
+            any_f32().prop_map(|yaw_rad| EstimatePart::Heading { yaw_rad }),
+        ];
+        (0.0f64..5e6, part).prop_map(|(autopilot_s, part)| EstimateSample { autopilot_s, part })
+    }
+
+    proptest! {
+        #[test]
+        fn whatever_arrives_only_a_finite_fresh_estimate_gets_through(
+            stream in proptest::collection::vec((any_sample(), 0.0f64..1.0), 1..60),
+        ) {
+            let mut w = EstimateWatch::new(TIMEOUT_S);
+            let mut now = 0.0;
+            for (sample, wait_s) in &stream {
+                now += wait_s;
+                w.take(sample, now);
+                if let Ok(e) = w.reading(now) {
+                    prop_assert!(e.valid && e.yaw_rad.is_finite());
+                    prop_assert!(e.position_m[..2].iter().all(|v| v.is_finite()));
+                }
+            }
+            // Long after the last sample nothing is fresh.
+            prop_assert_eq!(w.reading(now + 1e7), Err(Withheld::Stale));
+        }
     }
 }
