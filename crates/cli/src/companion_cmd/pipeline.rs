@@ -226,3 +226,85 @@ impl<'m, L: AutopilotLink> Companion<'m, L> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plumbline_slam::{local_map_cells, SlamConfig};
+
+    /// A link that sends everything and answers with scripted estimates, one per revolution.
+    struct Scripted(std::vec::IntoIter<Result<EstimatedState, Withheld>>);
+
+    impl AutopilotLink for Scripted {
+        fn heartbeat(&mut self, _: f64) -> Result<bool, CliError> {
+            Ok(true)
+        }
+        fn odometry(&mut self, _: &PoseFix) -> Result<bool, CliError> {
+            Ok(true)
+        }
+        fn obstacles(&mut self, _: f64, _: &[Beam], _: f32) -> Result<bool, CliError> {
+            Ok(true)
+        }
+        fn estimate(&mut self) -> Result<EstimatedState, Withheld> {
+            self.0.next().unwrap()
+        }
+    }
+
+    /// A revolution in a 4 m by 6 m room, centred, facing +x.
+    fn room(t_s: f64) -> LaserRecord {
+        let n = 360;
+        let inc = std::f32::consts::TAU / n as f32;
+        let ranges = (0..n)
+            .map(|i| {
+                let (s, c) = (inc * i as f32 - std::f32::consts::PI).sin_cos();
+                // Along an axis one of the two is infinite, and the other wall is nearer.
+                (2.0 / c.abs()).min(3.0 / s.abs())
+            })
+            .collect();
+        LaserRecord::new(t_s, -std::f32::consts::PI, inc, 10.0, ranges)
+    }
+
+    #[test]
+    fn a_guess_needs_two_usable_estimates_in_a_row_and_each_withholding_is_counted() {
+        let at = |x: f32| {
+            Ok(EstimatedState {
+                position_m: [x, 0.0, 1.0],
+                valid: true,
+                ..EstimatedState::default()
+            })
+        };
+        let script = vec![
+            Err(Withheld::Missing),
+            at(0.0),
+            at(0.0),
+            Err(Withheld::Stale),
+            at(0.0),
+            at(0.0),
+            Err(Withheld::Invalid),
+            Err(Withheld::Discontinuity),
+            at(0.0),
+            at(0.0),
+        ];
+        let config = SlamConfig::in_flight();
+        let mut cells = local_map_cells(&config);
+        let slam = Slam::new(config, &mut cells, false).unwrap();
+        let mut companion = Companion::new(slam, Scripted(script.into_iter()));
+        for k in 0..10 {
+            companion.revolution(&room(f64::from(k) * 0.2)).unwrap();
+        }
+        assert_eq!(
+            companion.guesses,
+            Guesses {
+                guessed: 3,
+                missing: 1,
+                stale: 1,
+                invalid: 1,
+                discontinuities: 1,
+            }
+        );
+        let s = companion.summary();
+        assert_eq!(s["motion_guesses"], 3);
+        assert_eq!(s["estimate_discontinuities"], 1);
+        assert_eq!(companion.lost_scans, 0);
+    }
+}
