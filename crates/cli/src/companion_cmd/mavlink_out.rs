@@ -129,6 +129,7 @@ impl AutopilotLink for MavlinkOut {
                 break;
             };
             let now_s = self.started.elapsed().as_secs_f64();
+            // Unix time only checks signatures, and this link has no key.
             let now = LinkTime {
                 t_s: now_s,
                 unix_s: 0.0,
