@@ -1,6 +1,8 @@
 //! `plumbline companion` end to end: recorded lidar data through the SLAM into a UDP socket on
 //! loopback, every datagram decoded as MAVLink 2 (the `mavlink` crate here; pymavlink in
-//! `tests/mavlink/companion_client.py`, run by the last test), and bad input as clear errors.
+//! `tests/mavlink/companion_client.py`), the autopilot's estimate read back as the SLAM's motion
+//! guess (pymavlink as the autopilot, `tests/mavlink/companion_autopilot.py`), and bad input as
+//! clear errors.
 
 mod support;
 
@@ -327,4 +329,50 @@ fn pymavlink_as_the_autopilot_accepts_every_message() {
         String::from_utf8_lossy(&out.stdout),
         stderr(&out)
     );
+}
+
+/// Runs `tests/mavlink/companion_autopilot.py CASE`: pymavlink plays an autopilot that streams
+/// its estimate back while the companion replays a corridor whose posts repeat, so a
+/// revolution's motion is ambiguous to the scans alone (see the script).
+fn autopilot_case(case: &str) {
+    let python = Path::new(REPO).join(".venv/bin/python");
+    assert!(
+        python.exists(),
+        "{} is missing: run scripts/setup.sh (it makes the venv with pymavlink)",
+        python.display()
+    );
+    let dir = scratch(&format!("companion-autopilot-{case}"));
+    let out = Command::new(&python)
+        .arg(Path::new(REPO).join("tests/mavlink/companion_autopilot.py"))
+        .arg(BIN)
+        .arg(&dir)
+        .arg(case)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        stderr(&out)
+    );
+}
+
+#[test]
+fn the_autopilots_position_and_attitude_guess_the_motion_the_scans_cannot_tell() {
+    autopilot_case("position");
+}
+
+#[test]
+fn the_autopilots_odometry_guesses_the_motion_the_scans_cannot_tell() {
+    autopilot_case("odometry");
+}
+
+#[test]
+fn without_the_autopilots_estimate_the_ambiguous_corridor_is_read_backwards() {
+    autopilot_case("silent");
+}
+
+#[test]
+fn a_silent_nan_failed_or_rebooted_autopilot_guesses_nothing_across_the_fault() {
+    autopilot_case("hostile");
 }

@@ -3,7 +3,8 @@
 //! The onboard code keeps its plain message structs; this crate is the only place that knows
 //! the wire format. A [`Link`] turns the vehicle's state into telemetry frames at documented
 //! rates ([`telemetry`]), incoming frames into core's [`GroundCommand`]s, ground heartbeats and
-//! parameter requests ([`InboundEvent`]), answers with COMMAND_ACK, PARAM_VALUE and
+//! parameter requests ([`InboundEvent`]) — and on a companion computer's link its autopilot's
+//! estimate ([`EstimateWatch`]) — answers with COMMAND_ACK, PARAM_VALUE and
 //! PARAM_ERROR, signs and checks signatures with a key, and counts everything it refuses
 //! ([`DropCounters`]). It owns no socket and reads no clock: the simulator, the companion
 //! computer and the fuzzers drive the same code and a run replays exactly.
@@ -16,6 +17,8 @@
 mod commands;
 mod counters;
 mod crc;
+mod estimate_in;
+mod estimate_watch;
 mod link;
 pub mod modes;
 pub mod ned;
@@ -30,6 +33,8 @@ mod wire;
 
 pub use commands::AckTo;
 pub use counters::DropCounters;
+pub use estimate_in::{estimate_sample, EstimatePart, EstimateSample};
+pub use estimate_watch::{EstimateWatch, Withheld};
 pub use link::{
     InboundEvent, Link, LinkConfig, LinkTime, Peer, COMPONENT_AUTOPILOT, COMPONENT_ONBOARD_COMPUTER,
 };

@@ -4,6 +4,7 @@
 
 use crate::commands::{ack, ground_command, mav_result, sticks, AckTo};
 use crate::counters::DropCounters;
+use crate::estimate_in::{estimate_sample, EstimateSample};
 use crate::obstacle::obstacle_distance;
 use crate::odometry::odometry_from_pose_fix;
 use crate::params::{ParamRef, ParamRequest, ParameterStore, RateLimit};
@@ -95,6 +96,10 @@ pub enum InboundEvent {
     GroundHeartbeat { system_id: u8 },
     /// A parameter request: answer with [`Link::serve_param`].
     Param { request: ParamRequest, from: Peer },
+    /// On a companion's link (component [`COMPONENT_ONBOARD_COMPUTER`]): its autopilot's own
+    /// estimate (ODOMETRY, LOCAL_POSITION_NED or ATTITUDE from component
+    /// [`COMPONENT_AUTOPILOT`] of this system), for a [`crate::EstimateWatch`].
+    Estimate(EstimateSample),
 }
 
 /// One MAVLink connection's state.
@@ -266,6 +271,15 @@ impl Link {
             system_id: frame.system_id,
             component_id: frame.component_id,
         };
+        let own_autopilot = Peer {
+            system_id: self.writer.system_id(),
+            component_id: COMPONENT_AUTOPILOT,
+        };
+        if self.writer.component_id() == COMPONENT_ONBOARD_COMPUTER && from == own_autopilot {
+            if let Some(sample) = estimate_sample(&message) {
+                return events.push(InboundEvent::Estimate(sample));
+            }
+        }
         match message {
             MavMessage::HEARTBEAT(h) if h.mavtype == MavType::MAV_TYPE_GCS => {
                 // With a key, only a signed heartbeat keeps the ground link alive: an unsigned

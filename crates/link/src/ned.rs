@@ -48,6 +48,21 @@ pub fn quaternion_from_euler(roll_rad: f32, pitch_rad: f32, yaw_rad: f32) -> [f3
     ]
 }
 
+/// The yaw (ZYX order) of a quaternion `(w, x, y, z)`, in whatever frame it is given: the
+/// heading an autopilot's attitude quaternion says, before the half turn. NaN when the
+/// quaternion has no direction (zero or non-finite), so the caller's finiteness check refuses it.
+pub fn yaw_from_quaternion(q: [f32; 4]) -> f32 {
+    let [w, x, y, z] = q;
+    let (s, c) = (2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+    let norm2 = w * w + x * x + y * y + z * z;
+    if !(norm2.is_finite() && norm2 > 0.0) {
+        return f32::NAN;
+    }
+    // For a quaternion of norm n, c carries 1 - 2(y^2 + z^2) where n^2 should stand; taking
+    // it as n^2 - 2(y^2 + z^2) keeps the angle right for a slightly unnormalised one.
+    s.atan2(c - 1.0 + norm2)
+}
+
 /// Sign of each pose component `(x, y, z, roll, pitch, yaw)` under the half turn; a covariance
 /// element `(i, j)` changes by the product of the two signs.
 const POSE_SIGNS: [f32; 6] = [1.0, -1.0, -1.0, 1.0, -1.0, -1.0];
@@ -125,6 +140,23 @@ mod tests {
     }
 
     #[test]
+    fn the_yaw_of_a_quaternion_is_its_heading() {
+        // A quarter turn right in NED (facing east): yaw +90 deg, whatever the roll and pitch.
+        let east = quaternion_from_euler(0.2, -0.1, FRAC_PI_2);
+        assert!((yaw_from_quaternion(east) - FRAC_PI_2).abs() < 1e-6);
+        // Facing south: the half turn, at +pi or -pi.
+        let south = yaw_from_quaternion([0.0, 0.0, 0.0, 1.0]);
+        assert!((south.abs() - PI).abs() < 1e-6, "{south}");
+        // Twice the length: the same heading.
+        let q = quaternion_from_euler(0.0, 0.0, -0.7).map(|v| 2.0 * v);
+        assert!((yaw_from_quaternion(q) + 0.7).abs() < 1e-6);
+        // No rotation to read.
+        assert!(yaw_from_quaternion([0.0; 4]).is_nan());
+        assert!(yaw_from_quaternion([f32::NAN, 0.0, 0.0, 0.0]).is_nan());
+        assert!(yaw_from_quaternion([f32::INFINITY, 0.0, 0.0, 1.0]).is_nan());
+    }
+
+    #[test]
     fn covariance_signs_follow_the_axes() {
         let mut cov = [[0.0f32; 6]; 6];
         for (i, row) in cov.iter_mut().enumerate() {
@@ -151,6 +183,10 @@ mod tests {
             prop_assert_eq!(flip_euler(back[0], back[1], back[2]), [roll, pitch, yaw]);
             let q = quaternion_from_euler(roll, pitch, yaw);
             prop_assert_eq!(flip_quaternion(flip_quaternion(q)), q);
+            // The heading read back from a quaternion, flipped, is the heading flipped.
+            let read = yaw_from_quaternion(flip_quaternion(q));
+            let d = (read + yaw).rem_euclid(2.0 * PI);
+            prop_assert!(d.min(2.0 * PI - d) < 1e-4, "{} vs {}", read, -yaw);
         }
 
         #[test]

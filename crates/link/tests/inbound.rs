@@ -355,3 +355,63 @@ fn without_a_key_the_link_says_so() {
     };
     assert!(t.text.to_str().unwrap().starts_with("link unsigned"));
 }
+
+#[test]
+fn a_companion_link_reads_its_own_autopilots_estimate_and_nobody_elses() {
+    use plumbline_link::common::{ATTITUDE_DATA, LOCAL_POSITION_NED_DATA};
+    use plumbline_link::{EstimatePart, COMPONENT_ONBOARD_COMPUTER};
+    let companion = || {
+        Link::new(LinkConfig {
+            component_id: COMPONENT_ONBOARD_COMPUTER,
+            ..LinkConfig::default()
+        })
+    };
+    let position = MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+        time_boot_ms: 2000,
+        x: 1.0,
+        y: 2.0,
+        z: -3.0,
+        ..Default::default()
+    });
+    let attitude = MavMessage::ATTITUDE(ATTITUDE_DATA {
+        time_boot_ms: 2010,
+        yaw: 0.5,
+        ..Default::default()
+    });
+    let mut autopilot = Ground::unsigned();
+    autopilot.header.system_id = 1;
+    autopilot.header.component_id = 1;
+    let mut bytes = autopilot.frame(&position);
+    bytes.extend(autopilot.frame(&attitude));
+    let mut link = companion();
+    let (events, replies) = feed(&mut link, &bytes, at(0.0));
+    assert!(replies.is_empty());
+    let parts: Vec<EstimatePart> = events
+        .iter()
+        .map(|e| match e {
+            InboundEvent::Estimate(s) => s.part,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(
+        parts,
+        [
+            EstimatePart::Position {
+                position_m: [1.0, -2.0, 3.0]
+            },
+            EstimatePart::Heading { yaw_rad: -0.5 }
+        ]
+    );
+    // Another vehicle's autopilot, a ground station's, or a vehicle's own link: not for this.
+    for (system_id, component_id) in [(2, 1), (1, 190)] {
+        let mut other = Ground::unsigned();
+        other.header.system_id = system_id;
+        other.header.component_id = component_id;
+        let mut link = companion();
+        let (events, _) = feed(&mut link, &other.frame(&position), at(0.0));
+        assert!(events.is_empty() && link.counters().not_handled == 1);
+    }
+    let mut vehicle = Link::new(LinkConfig::default());
+    let (events, _) = feed(&mut vehicle, &bytes, at(0.0));
+    assert!(events.is_empty() && vehicle.counters().not_handled == 2);
+}

@@ -1,5 +1,6 @@
 //! Bytes a real ground station (pymavlink) wrote, recorded in `data/mavlink/` by the script
-//! beside them: the link must turn them into the commands pymavlink meant.
+//! beside them: the link must turn them into the commands pymavlink meant; and an autopilot's
+//! estimate as a companion's link reads it back.
 mod common;
 
 use common::feed;
@@ -54,6 +55,7 @@ fn a_pymavlink_session_gives_the_commands_it_sent() {
                     }
                 }
             }
+            InboundEvent::Estimate(s) => format!("estimate {s:?}"),
         })
         .collect();
     let sticks = match events[4] {
@@ -140,4 +142,73 @@ fn pymavlinks_signed_kill_is_obeyed_once() {
     );
     assert!(events.is_empty());
     assert_eq!(later.counters().replayed, 1);
+}
+
+#[test]
+fn a_pymavlink_autopilots_estimate_becomes_enu_samples_a_watch_judges() {
+    use plumbline_link::{EstimatePart, EstimateWatch, Withheld, COMPONENT_ONBOARD_COMPUTER};
+    let mut link = Link::new(LinkConfig {
+        component_id: COMPONENT_ONBOARD_COMPUTER,
+        ..LinkConfig::default()
+    });
+    let (events, replies) = feed(
+        &mut link,
+        &fixture("autopilot-estimate.bin"),
+        LinkTime::since(0.0, 1.0),
+    );
+    assert!(replies.is_empty());
+    // The autopilot's heartbeat is not an estimate.
+    assert_eq!(link.counters().not_handled, 1);
+    let samples: Vec<_> = events
+        .iter()
+        .map(|e| match e {
+            InboundEvent::Estimate(s) => *s,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(samples.len(), 5);
+    assert_eq!(samples[0].autopilot_s, 61.5);
+    // 2 m north, 1 m east, 1.5 m up: x 2, y -1, z 1.5; yaw 0.5 rad clockwise is -0.5.
+    assert_eq!(
+        samples[0].part,
+        EstimatePart::Position {
+            position_m: [2.0, -1.0, 1.5]
+        }
+    );
+    assert_eq!(samples[1].part, EstimatePart::Heading { yaw_rad: -0.5 });
+    let EstimatePart::Pose {
+        position_m,
+        yaw_rad,
+        valid: true,
+        reset_counter: 2,
+    } = samples[2].part
+    else {
+        panic!("{:?}", samples[2]);
+    };
+    assert_eq!(position_m, [2.0, -1.0, 1.5]);
+    assert!((yaw_rad + 0.5).abs() < 1e-5, "{yaw_rad}");
+    assert!(matches!(
+        samples[3].part,
+        EstimatePart::Pose { valid: false, .. }
+    ));
+    // One after another into a watch: position and heading make an estimate, the good
+    // ODOMETRY replaces them (a switch of source), the failed one is refused and, fresh, stays
+    // preferred over the position that follows (whose north is NaN).
+    let mut watch = EstimateWatch::new(0.5);
+    let mut verdicts = Vec::new();
+    for (i, s) in samples.iter().enumerate() {
+        let arrival = 1.0 + 0.01 * i as f64;
+        watch.take(s, arrival);
+        verdicts.push(watch.reading(arrival).map(|e| e.position_m));
+    }
+    assert_eq!(
+        verdicts,
+        [
+            Err(Withheld::Stale),
+            Ok([2.0, -1.0, 1.5]),
+            Err(Withheld::Discontinuity),
+            Err(Withheld::Invalid),
+            Err(Withheld::Invalid),
+        ]
+    );
 }

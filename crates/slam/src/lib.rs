@@ -8,6 +8,7 @@ pub mod backend;
 pub mod config;
 pub mod correlative;
 pub mod deskew;
+pub mod estimated_motion;
 pub mod graph;
 pub mod grid;
 pub mod guard;
@@ -20,6 +21,7 @@ pub mod tracker;
 pub mod worker;
 
 pub use config::{EdgeNoise, GuardConfig, LoopConfig, SlamConfig};
+pub use estimated_motion::EstimatedMotion;
 pub use observed::Observed;
 pub use slam::{Finished, ScanPose, Slam, TrackingStats, MAP_JUMP_M, MAP_JUMP_RAD};
 pub use tracker::{local_map_cells, ConfigError};

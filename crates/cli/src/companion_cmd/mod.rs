@@ -63,6 +63,11 @@ pub struct CompanionArgs {
     /// Seconds to run on a live port (default: until the lidar stops). Valid range: (0, 31536000].
     #[arg(long, value_parser = within::<f64>(Range::above(0.0, 31_536_000.0)))]
     duration: Option<f64>,
+    /// Seconds after which the autopilot's estimate (ODOMETRY, or LOCAL_POSITION_NED with
+    /// ATTITUDE, read back on the --mavlink port) is too old to guess the SLAM's motion from;
+    /// without a fresh one the SLAM guesses from the lidar alone. Valid range: (0, 60].
+    #[arg(long, default_value_t = 0.5, value_parser = within::<f64>(Range::above(0.0, 60.0)))]
+    estimate_timeout: f64,
     /// Seconds of silence after which the lidar's port counts as dead. Valid range: (0, 3600].
     #[arg(long, default_value_t = 2.0, value_parser = within::<f64>(Range::above(0.0, 3600.0)))]
     idle_timeout: f64,
@@ -129,7 +134,7 @@ pub fn run(a: CompanionArgs) -> CliResult {
         .lidar
         .filter(|_| a.replay_log.is_none())
         .map_or(0.0, Device::min_range_m);
-    let mut link = mavlink_out::MavlinkOut::new(port, sysid, min_range_m);
+    let mut link = mavlink_out::MavlinkOut::new(port, sysid, min_range_m, a.estimate_timeout);
     let view = a.view.start()?;
     let mut summary = run_with(&source, live, a.realtime && !live, &mut link, view.as_ref())?;
     let c = link.port().counters();
@@ -189,6 +194,15 @@ fn run_with<L: AutopilotLink>(
             "plumbline: {} of {} revolutions had no valid beam (lidar covered or stopped?); \
              each was sent as lost (quality -1)",
             companion.empty_scans, companion.scans
+        );
+    }
+    let g = companion.guesses;
+    if g.guessed == 0 && companion.scans > 2 {
+        eprintln!(
+            "plumbline: no revolution got a motion guess from the autopilot's estimate \
+             (missing {}, stale {}, invalid {}, broken {}); the SLAM guessed from the lidar \
+             alone. Stream LOCAL_POSITION_NED and ATTITUDE, or ODOMETRY, to this port.",
+            g.missing, g.stale, g.invalid, g.discontinuities
         );
     }
     let wall_s = wall.elapsed().as_secs_f64();

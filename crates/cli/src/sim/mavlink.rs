@@ -268,6 +268,9 @@ impl MavlinkStation {
                     self.link
                         .serve_param(&request, from, params, now, &mut self.out)
                 }
+                // Only a companion's link reads an autopilot's estimate; this one is the
+                // autopilot.
+                InboundEvent::Estimate(_) => {}
             }
         }
         heartbeat

@@ -12,7 +12,6 @@
 //! guesses each revolution's motion from the flight part's estimate ([`EstimatedMotion`]).
 //! Everything runs inline (the SLAM backend too), so a run is a function of its seed.
 
-use super::estimated_motion::EstimatedMotion;
 use super::fix_covariance::fix_covariance;
 use super::landing_spot::landing_spot;
 use super::onboard_link::{CompanionComputer, FlightLog};
@@ -27,7 +26,7 @@ use plumbline_core::msgs::{
 };
 use plumbline_core::scan::Scan;
 use plumbline_explore::{BlindBudget, DoneReason, ExploreStep, Explorer, Path};
-use plumbline_slam::{ScanPose, Slam};
+use plumbline_slam::{EstimatedMotion, ScanPose, Slam};
 use std::cell::RefCell;
 use std::rc::Rc;
 

@@ -12,7 +12,6 @@
 
 mod config;
 mod fix_covariance;
-mod estimated_motion;
 mod landing_spot;
 pub mod ground;
 mod lockstep;

@@ -1,5 +1,7 @@
 //! The flight part's estimated motion between two lidar revolutions, as the companion's SLAM
-//! takes it for its motion guess.
+//! takes it for its motion guess: the simulator's flight part hands its estimate over in
+//! process, a real autopilot's comes back over MAVLink (`plumbline companion`); both go
+//! through this one rule.
 //!
 //! Along a featureless corridor the scan match sees nothing along the axis and keeps the
 //! guess there. The SLAM's own guess is the previous revolution's motion carried on, which runs
