@@ -32,6 +32,7 @@ import time
 
 os.environ["MAVLINK20"] = "1"
 from pymavlink.dialects.v20 import common as mavlink  # noqa: E402
+from peer_socket import loopback_socket  # noqa: E402
 
 RATE_HZ = 5.0
 SPEED_M_S = 1.2
@@ -152,11 +153,7 @@ def main():
     seconds = 8.0 if case == "hostile" else 4.0
     log = os.path.join(scratch, f"corridor-{case}.clf")
     write_log(log, seconds)
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
-    sock.bind(("127.0.0.1", 0))
-    sock.settimeout(0.005)
-    port = sock.getsockname()[1]
+    sock, port = loopback_socket(0.005)
     child = subprocess.Popen(
         [binary, "companion", "--replay-log", log, "--realtime",
          "--mavlink", f"udpout:127.0.0.1:{port}", "--json"],

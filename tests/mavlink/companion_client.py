@@ -13,6 +13,7 @@ import sys
 import time
 
 from pymavlink.dialects.v20 import common as mavlink
+from peer_socket import loopback_socket
 
 
 def fail(why):
@@ -24,11 +25,7 @@ def main():
     binary, capture = sys.argv[1], sys.argv[2]
     # Datagrams are collected as they come and decoded afterwards, so the peer keeps up with a
     # replay that runs as fast as it decodes (the companion drops what a full socket refuses).
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
-    sock.bind(("127.0.0.1", 0))
-    sock.settimeout(0.2)
-    port = sock.getsockname()[1]
+    sock, port = loopback_socket(0.2)
     child = subprocess.Popen(
         [binary, "companion", "--lidar", "xv11", "--replay", capture,
          "--mavlink", f"udpout:127.0.0.1:{port}", "--json"],

@@ -308,19 +308,17 @@ fn a_lidar_port_that_vanishes_mid_run_keeps_what_was_sent_and_fails() {
     assert_eq!(s["odometry_sent"], s["scans"]);
 }
 
-#[test]
-fn pymavlink_as_the_autopilot_accepts_every_message() {
+/// Runs a pymavlink script from the project's venv with `args`; fails the test on its failure.
+fn run_pymavlink_script(script: &str, args: &[&std::ffi::OsStr]) {
     let python = Path::new(REPO).join(".venv/bin/python");
     assert!(
         python.exists(),
         "{} is missing: run scripts/setup.sh (it makes the venv with pymavlink)",
         python.display()
     );
-    let script = Path::new(REPO).join("tests/mavlink/companion_client.py");
     let out = Command::new(&python)
-        .arg(&script)
-        .arg(BIN)
-        .arg(capture())
+        .arg(Path::new(REPO).join(script))
+        .args(args)
         .output()
         .unwrap();
     assert!(
@@ -331,29 +329,23 @@ fn pymavlink_as_the_autopilot_accepts_every_message() {
     );
 }
 
+#[test]
+fn pymavlink_as_the_autopilot_accepts_every_message() {
+    let capture = capture();
+    run_pymavlink_script(
+        "tests/mavlink/companion_client.py",
+        &[BIN.as_ref(), capture.as_ref()],
+    );
+}
+
 /// Runs `tests/mavlink/companion_autopilot.py CASE`: pymavlink plays an autopilot that streams
 /// its estimate back while the companion replays a corridor whose posts repeat, so a
 /// revolution's motion is ambiguous to the scans alone (see the script).
 fn autopilot_case(case: &str) {
-    let python = Path::new(REPO).join(".venv/bin/python");
-    assert!(
-        python.exists(),
-        "{} is missing: run scripts/setup.sh (it makes the venv with pymavlink)",
-        python.display()
-    );
     let dir = scratch(&format!("companion-autopilot-{case}"));
-    let out = Command::new(&python)
-        .arg(Path::new(REPO).join("tests/mavlink/companion_autopilot.py"))
-        .arg(BIN)
-        .arg(&dir)
-        .arg(case)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        stderr(&out)
+    run_pymavlink_script(
+        "tests/mavlink/companion_autopilot.py",
+        &[BIN.as_ref(), dir.as_ref(), case.as_ref()],
     );
 }
 
