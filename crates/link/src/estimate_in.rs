@@ -8,19 +8,23 @@
 use crate::ned::{flip_euler, flip_yz, yaw_from_quaternion};
 use mavlink::dialects::common::{MavFrame, MavMessage};
 
+/// ODOMETRY's content: position and heading of one instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OdometryPose {
+    pub position_m: [f32; 3],
+    pub yaw_rad: f32,
+    /// False when the autopilot says the estimate failed (quality -1) or gives it in a frame
+    /// this side cannot read (anything but a local z-down frame: LOCAL_NED, LOCAL_FRD).
+    pub valid: bool,
+    /// Goes up when the autopilot's estimate jumped.
+    pub reset_counter: u8,
+}
+
 /// What one message said about the autopilot's estimate, in Plumbline's frames.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum EstimatePart {
-    /// ODOMETRY: position and heading of one instant. `valid` is false when the autopilot
-    /// says the estimate failed (quality -1) or gives it in a frame this side cannot read
-    /// (anything but a local z-down frame: LOCAL_NED, LOCAL_FRD). `reset_counter` goes up
-    /// when the autopilot's estimate jumped.
-    Pose {
-        position_m: [f32; 3],
-        yaw_rad: f32,
-        valid: bool,
-        reset_counter: u8,
-    },
+    /// ODOMETRY.
+    Pose(OdometryPose),
     /// LOCAL_POSITION_NED: the position alone (the autopilot stops sending it while it has
     /// none).
     Position { position_m: [f32; 3] },
@@ -48,12 +52,12 @@ pub fn estimate_sample(message: &MavMessage) -> Option<EstimateSample> {
             );
             Some(EstimateSample {
                 autopilot_s: o.time_usec as f64 * 1e-6,
-                part: EstimatePart::Pose {
+                part: EstimatePart::Pose(OdometryPose {
                     position_m: flip_yz([o.x, o.y, o.z]),
                     yaw_rad: flip_euler(0.0, 0.0, yaw_from_quaternion(o.q))[2],
                     valid: readable && o.quality != -1,
                     reset_counter: o.reset_counter,
-                },
+                }),
             })
         }
         MavMessage::LOCAL_POSITION_NED(p) => Some(EstimateSample {
@@ -100,12 +104,12 @@ mod tests {
         // axes x 2, y -1 (east is to the right of north), z 1.5, heading -90 deg.
         let s = estimate_sample(&MavMessage::ODOMETRY(odometry(2.0, 1.0, FRAC_PI_2))).unwrap();
         assert_eq!(s.autopilot_s, 2.5);
-        let EstimatePart::Pose {
+        let EstimatePart::Pose(OdometryPose {
             position_m,
             yaw_rad,
             valid,
             reset_counter,
-        } = s.part
+        }) = s.part
         else {
             panic!("{s:?}");
         };
@@ -147,7 +151,7 @@ mod tests {
     fn a_failed_or_unreadable_odometry_is_marked_invalid() {
         let valid = |o: ODOMETRY_DATA| match estimate_sample(&MavMessage::ODOMETRY(o)) {
             Some(EstimateSample {
-                part: EstimatePart::Pose { valid, .. },
+                part: EstimatePart::Pose(OdometryPose { valid, .. }),
                 ..
             }) => valid,
             other => panic!("{other:?}"),
@@ -173,7 +177,7 @@ mod tests {
             ..good
         };
         match estimate_sample(&MavMessage::ODOMETRY(nan)).unwrap().part {
-            EstimatePart::Pose { yaw_rad, .. } => assert!(yaw_rad.is_nan()),
+            EstimatePart::Pose(OdometryPose { yaw_rad, .. }) => assert!(yaw_rad.is_nan()),
             other => panic!("{other:?}"),
         }
     }

@@ -16,7 +16,7 @@
 //! the smallest delay seen so far, not from when it was read: a sample that sat in a busy
 //! serial buffer is as old as its stamp says.
 
-use crate::estimate_in::{EstimatePart, EstimateSample};
+use crate::estimate_in::{EstimatePart, EstimateSample, OdometryPose};
 use plumbline_core::msgs::EstimatedState;
 
 /// A sample whose stamp is this much further ahead of the companion's clock than the smallest
@@ -82,20 +82,11 @@ enum Source {
     PositionHeading,
 }
 
-/// ODOMETRY's content as kept.
-#[derive(Clone, Copy, Debug)]
-struct Pose {
-    position_m: [f32; 3],
-    yaw_rad: f32,
-    valid: bool,
-    reset_counter: u8,
-}
-
 /// The autopilot's estimate samples as they arrive, judged at each revolution.
 #[derive(Clone, Debug)]
 pub struct EstimateWatch {
     timeout_s: f64,
-    pose: Option<Stamped<Pose>>,
+    pose: Option<Stamped<OdometryPose>>,
     position: Option<Stamped<[f32; 3]>>,
     heading: Option<Stamped<f32>>,
     /// A clock broke since the previous reading.
@@ -121,20 +112,7 @@ impl EstimateWatch {
     pub fn take(&mut self, sample: &EstimateSample, arrival_s: f64) {
         let t = sample.autopilot_s;
         self.broken |= match sample.part {
-            EstimatePart::Pose {
-                position_m,
-                yaw_rad,
-                valid,
-                reset_counter,
-            } => {
-                let pose = Pose {
-                    position_m,
-                    yaw_rad,
-                    valid,
-                    reset_counter,
-                };
-                update(&mut self.pose, pose, t, arrival_s)
-            }
+            EstimatePart::Pose(pose) => update(&mut self.pose, pose, t, arrival_s),
             EstimatePart::Position { position_m } => {
                 update(&mut self.position, position_m, t, arrival_s)
             }
@@ -213,12 +191,12 @@ mod tests {
     fn pose(t: f64, x: f32, valid: bool, reset_counter: u8) -> EstimateSample {
         EstimateSample {
             autopilot_s: t,
-            part: EstimatePart::Pose {
+            part: EstimatePart::Pose(OdometryPose {
                 position_m: [x, 0.0, 1.0],
                 yaw_rad: 0.3,
                 valid,
                 reset_counter,
-            },
+            }),
         }
     }
 
@@ -350,12 +328,12 @@ mod tests {
     fn any_sample() -> impl Strategy<Value = EstimateSample> {
         let part = prop_oneof![
             (any_f32(), any_f32(), any::<bool>(), any::<u8>()).prop_map(|(x, yaw, valid, r)| {
-                EstimatePart::Pose {
+                EstimatePart::Pose(OdometryPose {
                     position_m: [x, -x, 1.0],
                     yaw_rad: yaw,
                     valid,
                     reset_counter: r,
-                }
+                })
             }),
             any_f32().prop_map(|x| EstimatePart::Position {
                 position_m: [x, 1.0, 1.0]

@@ -33,7 +33,7 @@ mod wire;
 
 pub use commands::AckTo;
 pub use counters::DropCounters;
-pub use estimate_in::{estimate_sample, EstimatePart, EstimateSample};
+pub use estimate_in::{estimate_sample, EstimatePart, EstimateSample, OdometryPose};
 pub use estimate_watch::{EstimateWatch, Withheld};
 pub use link::{
     InboundEvent, Link, LinkConfig, LinkTime, Peer, COMPONENT_AUTOPILOT, COMPONENT_ONBOARD_COMPUTER,

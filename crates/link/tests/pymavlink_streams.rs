@@ -146,7 +146,9 @@ fn pymavlinks_signed_kill_is_obeyed_once() {
 
 #[test]
 fn a_pymavlink_autopilots_estimate_becomes_enu_samples_a_watch_judges() {
-    use plumbline_link::{EstimatePart, EstimateWatch, Withheld, COMPONENT_ONBOARD_COMPUTER};
+    use plumbline_link::{
+        EstimatePart, EstimateWatch, OdometryPose, Withheld, COMPONENT_ONBOARD_COMPUTER,
+    };
     let mut link = Link::new(LinkConfig {
         component_id: COMPONENT_ONBOARD_COMPUTER,
         ..LinkConfig::default()
@@ -176,12 +178,12 @@ fn a_pymavlink_autopilots_estimate_becomes_enu_samples_a_watch_judges() {
         }
     );
     assert_eq!(samples[1].part, EstimatePart::Heading { yaw_rad: -0.5 });
-    let EstimatePart::Pose {
+    let EstimatePart::Pose(OdometryPose {
         position_m,
         yaw_rad,
         valid: true,
         reset_counter: 2,
-    } = samples[2].part
+    }) = samples[2].part
     else {
         panic!("{:?}", samples[2]);
     };
@@ -189,7 +191,7 @@ fn a_pymavlink_autopilots_estimate_becomes_enu_samples_a_watch_judges() {
     assert!((yaw_rad + 0.5).abs() < 1e-5, "{yaw_rad}");
     assert!(matches!(
         samples[3].part,
-        EstimatePart::Pose { valid: false, .. }
+        EstimatePart::Pose(OdometryPose { valid: false, .. })
     ));
     // One after another into a watch: position and heading make an estimate, the good
     // ODOMETRY replaces them (a switch of source), the failed one is refused and, fresh, stays
