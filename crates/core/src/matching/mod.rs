@@ -46,6 +46,8 @@ pub struct ScanMatcher<const N: usize> {
     has_reference: bool,
     /// Translation of the previous match, for the seed 000 sec. 4.2 test.
     previous_translation: Vec2,
+    /// Matches left before a low inlier ratio alone may start a search again.
+    search_rest: u8,
     /// Each current point's partner in the last association pass (see `associate::Partners`).
     partners: [u16; N],
 }
@@ -58,6 +60,7 @@ impl<const N: usize> ScanMatcher<N> {
             reference: 0,
             has_reference: false,
             previous_translation: Vec2::ZERO,
+            search_rest: 0,
             partners: [associate::NO_PARTNER; N],
         }
     }
@@ -159,35 +162,45 @@ impl<const N: usize> ScanMatcher<N> {
             }
         };
         let first = attempt(guess);
-        let is_poor = |r: &Result<MatchResult, MatchError>| match r {
-            Ok(r) => {
-                r.quality.inlier_ratio < cfg.recovery_below_inlier_ratio
-                    || r.quality.status == MatchStatus::IterationLimit
-            }
+        let is_hard = |r: &Result<MatchResult, MatchError>| match r {
+            Ok(r) => r.quality.status == MatchStatus::IterationLimit,
             Err(e) => matches!(
                 e,
                 MatchError::TooFewCorrespondences { .. } | MatchError::Diverged
             ),
         };
+        let is_sparse = |r: &Result<MatchResult, MatchError>| matches!(r, Ok(r) if r.quality.inlier_ratio < cfg.recovery_below_inlier_ratio);
         let mut result = first;
+        let rested = self.search_rest == 0;
+        self.search_rest = self.search_rest.saturating_sub(1);
         if cfg.recovery && cfg.kind != MatcherKind::IclPaper {
+            let mut searched_on_ratio = false;
+            let mut rescued = false;
             for search in [SearchBox::heading(cfg), SearchBox::pose(cfg)] {
-                if !is_poor(&result) {
+                let hard = is_hard(&result);
+                if !(hard || (rested && is_sparse(&result))) {
                     break;
                 }
+                searched_on_ratio |= !hard;
                 let seed = recovery::best_pose(reference, current, guess, search, cfg);
                 let second = attempt(seed);
                 result = match (&result, second) {
                     (Ok(a), Ok(b)) if a.quality.inliers >= b.quality.inliers => result,
-                    (_, Ok(b)) => Ok(MatchResult {
-                        quality: MatchQuality {
-                            recovered: true,
-                            ..b.quality
-                        },
-                        ..b
-                    }),
+                    (_, Ok(b)) => {
+                        rescued = true;
+                        Ok(MatchResult {
+                            quality: MatchQuality {
+                                recovered: true,
+                                ..b.quality
+                            },
+                            ..b
+                        })
+                    }
                     (_, Err(_)) => result,
                 };
+            }
+            if searched_on_ratio && !rescued {
+                self.search_rest = cfg.recovery_rest_matches;
             }
         }
         let mut result = result?;

@@ -118,6 +118,19 @@ impl Default for OdometryConfig {
     }
 }
 
+impl OdometryConfig {
+    /// The odometry as the onboard stack flies it: the defaults, with the matcher's recovery
+    /// search resting for three matches after a search a low inlier ratio alone started found
+    /// nothing better ([`MatchConfig::recovery_rest_matches`]). Over the simulated exploration
+    /// flights (seeds 1-200, three worlds) every count stayed within its spread, and the
+    /// slowest Intel flights took a fifth to a half less CPU.
+    pub fn in_flight() -> Self {
+        let mut config = Self::default();
+        config.matcher.recovery_rest_matches = 3;
+        config
+    }
+}
+
 /// What one scan did to the estimate.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum OdometryStep {

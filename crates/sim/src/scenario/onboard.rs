@@ -69,7 +69,7 @@ pub(super) fn stack(
     options: &Options,
     config: &SimConfig,
 ) -> Result<(OdometryConfig, AutopilotConfig), ScenarioError> {
-    let mut odometry = OdometryConfig::default();
+    let mut odometry = OdometryConfig::in_flight();
     odometry.matcher.dynamic_rejection = options.dynamic_rejection;
     let mut autopilot = autopilot_for(&config.vehicle);
     if options.tuning == Tuning::Soft {
