@@ -61,7 +61,7 @@ fn start() -> &'static mut Vehicle {
     let slot = &raw mut VEHICLE;
     let vehicle = Vehicle {
         decoder: Xv11Decoder::new(),
-        onboard: Onboard::new(OdometryConfig::default(), AutopilotConfig::default()),
+        onboard: Onboard::new(OdometryConfig::in_flight(), AutopilotConfig::default()),
     };
     // SAFETY: called once, from the entry, on the only thread, with no interrupts, so this is
     // the only reference to `VEHICLE` that ever exists.

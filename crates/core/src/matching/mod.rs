@@ -169,7 +169,10 @@ impl<const N: usize> ScanMatcher<N> {
                 MatchError::TooFewCorrespondences { .. } | MatchError::Diverged
             ),
         };
-        let is_sparse = |r: &Result<MatchResult, MatchError>| matches!(r, Ok(r) if r.quality.inlier_ratio < cfg.recovery_below_inlier_ratio);
+        let is_sparse = |r: &Result<MatchResult, MatchError>| {
+            r.as_ref()
+                .is_ok_and(|r| r.quality.inlier_ratio < cfg.recovery_below_inlier_ratio)
+        };
         let mut result = first;
         let rested = self.search_rest == 0;
         self.search_rest = self.search_rest.saturating_sub(1);
