@@ -178,7 +178,6 @@ impl<const N: usize> ScanMatcher<N> {
         self.search_rest = self.search_rest.saturating_sub(1);
         if cfg.recovery && cfg.kind != MatcherKind::IclPaper {
             let mut searched_on_ratio = false;
-            let mut rescued = false;
             for search in [SearchBox::heading(cfg), SearchBox::pose(cfg)] {
                 let hard = is_hard(&result);
                 if !(hard || (rested && is_sparse(&result))) {
@@ -189,19 +188,17 @@ impl<const N: usize> ScanMatcher<N> {
                 let second = attempt(seed);
                 result = match (&result, second) {
                     (Ok(a), Ok(b)) if a.quality.inliers >= b.quality.inliers => result,
-                    (_, Ok(b)) => {
-                        rescued = true;
-                        Ok(MatchResult {
-                            quality: MatchQuality {
-                                recovered: true,
-                                ..b.quality
-                            },
-                            ..b
-                        })
-                    }
+                    (_, Ok(b)) => Ok(MatchResult {
+                        quality: MatchQuality {
+                            recovered: true,
+                            ..b.quality
+                        },
+                        ..b
+                    }),
                     (_, Err(_)) => result,
                 };
             }
+            let rescued = result.as_ref().is_ok_and(|r| r.quality.recovered);
             if searched_on_ratio && !rescued {
                 self.search_rest = cfg.recovery_rest_matches;
             }
